@@ -1,0 +1,35 @@
+#pragma once
+// A dense scalar field sampled at the vertices of a regular grid: the plain data every stage passes on.
+// Vertex (i,j,k) sits at origin + voxel_size*(i,j,k); its linear index is i + nx*(j + ny*k).
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace chokeloops {
+
+// Every error a user can cause (bad input, impossible parameters) is thrown as this, with a message
+// that names the problem and what to do. `exit_code` is what the CLI returns: 2 bad input, 3 resources.
+struct Error : std::runtime_error {
+  int exit_code;
+  explicit Error(const std::string& msg, int code = 2) : std::runtime_error(msg), exit_code(code) {}
+};
+
+struct ScalarGrid {
+  std::array<int, 3> dims{0, 0, 0};          // number of vertices along x, y, z
+  std::array<double, 3> origin{0, 0, 0};     // world position of vertex (0,0,0)
+  double voxel_size = 1.0;                   // spacing in input units
+  std::vector<float> values;                 // size nx*ny*nz, x fastest
+
+  std::int64_t vertex_count() const { return std::int64_t(dims[0]) * dims[1] * dims[2]; }
+  std::int64_t index(int i, int j, int k) const { return i + std::int64_t(dims[0]) * (j + std::int64_t(dims[1]) * k); }
+  std::array<double, 3> world(std::array<int, 3> ijk) const {
+    return {origin[0] + voxel_size * ijk[0], origin[1] + voxel_size * ijk[1], origin[2] + voxel_size * ijk[2]};
+  }
+};
+
+// Throws Error when the grid is empty, has a dimension < 2, mismatched storage, or a non-finite value.
+void validate_grid(const ScalarGrid& grid);
+
+}  // namespace chokeloops

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs exactly the Debian 12 packages chokeloops needs to build, test and benchmark.
+# Idempotent; run as root (or with sudo available).
+set -euo pipefail
+PKGS=(
+  build-essential cmake pkg-config git
+  libopenvdb-dev libboost-iostreams-dev libblosc-dev libtbb-dev zlib1g-dev libimath-dev
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libeigen3-dev libtet1.5-dev
+  libgtest-dev googletest libphat-dev
+  nlohmann-json3-dev
+)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "install-deps: installed ${missing[*]}"
