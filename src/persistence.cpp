@@ -1,0 +1,527 @@
+// Lower-star persistence on the implicit Freudenthal complex, without a global boundary matrix.
+//
+// Why it is fast: a vertex whose lower link (the part of its 14-neighbour link sphere below it) is a
+// disk changes no homology, so every pair between two different lower stars starts and ends at a
+// vertex whose lower link has several components (join saddle: dim-0 deaths, dim-1 births), whose
+// upper link has several components (split saddle: dim-2 births, dim-1 deaths), or at an extremum.
+// A 14-bit mask and a table of link components classify every vertex in one parallel pass.
+//  * dim 0: each vertex points to its lowest neighbour; pointer jumping gives every vertex its minimum.
+//    Join saddles, in filtration order, merge the minima of their lower-link components with the elder
+//    rule (union-find). The cross edge of a lower-link component is (s, lowest vertex of the component).
+//  * dim 2: the same upside down on the dual graph (tetrahedra joined by triangles, the outside of the box
+//    one node that never dies): each vertex points up, maxima own the last tetrahedron of their star, and
+//    split saddles, in reverse order, replay their lower star's tetrahedra and triangles locally.
+//  * dim 1: the edges left by dim 0 and the triangles left by dim 2 are paired by reducing only the
+//    boundaries of those triangles; a pivot edge paired inside its own lower star is replaced by the rest
+//    of that pair's cone (a path in the lower link), negative edges are compressed away.
+// Everything but the dim-1 reduction runs in parallel; every step is deterministic.
+#include "chokeloops/persistence.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <queue>
+#include <unordered_map>
+
+#include "link_table.h"
+
+namespace chokeloops {
+
+std::size_t PersistenceDiagram::count(int dim) const {
+  std::size_t n = 0;
+  for (auto& p : pairs) n += p.dim == dim;
+  return n;
+}
+
+namespace {
+
+constexpr std::uint32_t kOutside = 0xFFFFFFFFu;  // the outside of the box: +inf, never dies
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+inline std::uint32_t load(const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); }
+inline void store(std::uint32_t& x, std::uint32_t v) { __atomic_store_n(&x, v, __ATOMIC_RELAXED); }
+
+struct EdgeKey {
+  Id hi, lo;
+  bool operator==(const EdgeKey& o) const { return hi == o.hi && lo == o.lo; }
+};
+
+// What a lower-star reduction of vertex v's lower link says about the edges (v, x): x is the root of its
+// lower-link component (a cross edge), or x died in the link's dim-0 persistence when `killer` joined it
+// to the older root `older` (then (v,x) is paired inside the lower star of v).
+struct LowerLinkInfo {
+  std::uint16_t lower = 0;
+  std::int8_t lowest = -1;                 // neighbour slot of the lowest lower neighbour
+  std::array<std::int8_t, 14> killer{};    // link edge index that killed slot n, or -1 for a root
+  std::array<std::int8_t, 14> older{};     // the older root it merged into
+};
+
+class Engine {
+ public:
+  Engine(const ScalarGrid& grid, const ProgressFn& progress)
+      : grid_(grid), f_(grid.values.data()), cx_(grid.dims), V_(cx_.vertex_count()), progress_(progress),
+        table_(detail::link_component_table()), link_(freudenthal::vertex_link()) {
+    for (int n = 0; n < 14; ++n) {
+      delta_[n] = cx_.neighbor_delta(n);
+      auto o = freudenthal::neighbor_offset(n);
+      slot_of_offset_[(o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = std::int8_t(n);
+    }
+  }
+
+  PersistenceDiagram run() {
+    PersistenceDiagram out;
+    out.dims = grid_.dims;
+    auto t0 = Clock::now();
+    report("classify", 0);
+    classify();
+    jump(desc_);
+    jump(asc_);
+    out.stats.seconds_classify = seconds_since(t0);
+    auto t = Clock::now();
+    report("dim 0", 0.3);
+    dim0(out);
+    out.stats.seconds_dim0 = seconds_since(t);
+    t = Clock::now();
+    report("dim 2", 0.45);
+    dim2(out);
+    out.stats.seconds_dim2 = seconds_since(t);
+    t = Clock::now();
+    report("dim 1", 0.6);
+    dim1(out);
+    out.stats.seconds_dim1 = seconds_since(t);
+    finish(out);
+    out.stats.join_saddles = Id(joins_.size());
+    out.stats.split_saddles = Id(splits_.size());
+    out.stats.minima = minima_;
+    out.stats.maxima = maxima_;
+    out.stats.seconds_total = seconds_since(t0);
+    report("done", 1);
+    return out;
+  }
+
+ private:
+  void report(const char* stage, double fraction) {
+    if (progress_ && !progress_(stage, fraction)) throw Error("persistence interrupted");
+  }
+  bool less(Id a, Id b) const { return vertex_less(f_, a, b); }
+
+  // Lower mask and out-of-box mask of vertex v's 14 link slots.
+  void masks(Id v, std::uint16_t& lower, std::uint16_t& outside) const {
+    auto c = cx_.coords(v);
+    bool border = c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == grid_.dims[0] - 1 ||
+                  c[1] == grid_.dims[1] - 1 || c[2] == grid_.dims[2] - 1;
+    lower = outside = 0;
+    for (int n = 0; n < 14; ++n) {
+      if (border && !cx_.neighbor_inside(c, n)) { outside |= std::uint16_t(1u << n); continue; }
+      if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
+    }
+  }
+  int slot(Id v, Id x) const {
+    auto a = cx_.coords(v), b = cx_.coords(x);
+    return slot_of_offset_[(b[0] - a[0] + 1) + 3 * (b[1] - a[1] + 1) + 9 * (b[2] - a[2] + 1)];
+  }
+
+  void classify() {
+    desc_.resize(V_);
+    asc_.resize(V_);
+    const int nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
+    struct Local { std::vector<std::uint32_t> joins, splits; Id minima = 0, maxima = 0; };
+    tbb::enumerable_thread_specific<Local> locals;
+    tbb::parallel_for(tbb::blocked_range<int>(0, nz * ny), [&](const tbb::blocked_range<int>& r) {
+      Local& L = locals.local();
+      for (int row = r.begin(); row != r.end(); ++row) {
+        int j = row % ny, k = row / ny;
+        for (int i = 0; i < nx; ++i) {
+          Id v = cx_.vertex(i, j, k);
+          bool border = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
+          std::uint16_t lower = 0, outside = 0;
+          Id lo = v, hi = v;
+          for (int n = 0; n < 14; ++n) {
+            if (border && !cx_.neighbor_inside({i, j, k}, n)) { outside |= std::uint16_t(1u << n); continue; }
+            Id u = v + delta_[n];
+            if (less(u, v)) {
+              lower |= std::uint16_t(1u << n);
+              if (lo == v || less(u, lo)) lo = u;
+            } else if (hi == v || less(hi, u)) {
+              hi = u;
+            }
+          }
+          std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
+          desc_[v] = std::uint32_t(lo);
+          asc_[v] = outside ? kOutside : std::uint32_t(hi);
+          if (lower == 0) ++L.minima;
+          if (upper == 0) ++L.maxima;
+          if (table_[lower].count >= 2) L.joins.push_back(std::uint32_t(v));
+          if (table_[upper].count >= 2) L.splits.push_back(std::uint32_t(v));
+        }
+      }
+    });
+    for (auto& L : locals) {
+      joins_.insert(joins_.end(), L.joins.begin(), L.joins.end());
+      splits_.insert(splits_.end(), L.splits.begin(), L.splits.end());
+      minima_ += L.minima;
+      maxima_ += L.maxima;
+    }
+    auto by_order = [this](std::uint32_t a, std::uint32_t b) { return less(a, b); };
+    tbb::parallel_sort(joins_.begin(), joins_.end(), by_order);
+    tbb::parallel_sort(splits_.begin(), splits_.end(), [&](std::uint32_t a, std::uint32_t b) { return less(b, a); });
+  }
+
+  // Every pointer ends at the root of its chain (a minimum, a maximum, or the outside).
+  void jump(std::vector<std::uint32_t>& p) {
+    for (;;) {
+      std::atomic<bool> changed{false};
+      tbb::parallel_for(tbb::blocked_range<Id>(0, V_, 1 << 15), [&](const tbb::blocked_range<Id>& r) {
+        bool ch = false;
+        for (Id v = r.begin(); v != r.end(); ++v) {
+          std::uint32_t a = load(p[v]);
+          if (a == kOutside || a == v) continue;
+          std::uint32_t b = load(p[a]);
+          if (b != a) { store(p[v], b); ch = true; }
+        }
+        if (ch) changed = true;
+      });
+      if (!changed) break;
+    }
+  }
+
+  std::uint32_t find(std::vector<std::uint32_t>& p, std::uint32_t x) const {
+    while (x != kOutside && p[x] != x) {
+      std::uint32_t up = p[x];
+      if (up != kOutside && p[up] != up) p[x] = p[up];
+      x = p[x];
+    }
+    return x;
+  }
+
+  void dim0(PersistenceDiagram& out) {
+    for (std::uint32_t s : joins_) {
+      std::uint16_t lower, outside;
+      masks(s, lower, outside);
+      const auto& comps = table_[lower];
+      std::array<Id, 7> low{};
+      for (int c = 0; c < comps.count; ++c) {
+        Id best = -1;
+        for (unsigned m = comps.masks[c]; m; m &= m - 1) {
+          Id u = s + delta_[__builtin_ctz(m)];
+          if (best < 0 || less(u, best)) best = u;
+        }
+        low[c] = best;
+      }
+      std::sort(low.begin(), low.begin() + comps.count, [this](Id a, Id b) { return less(a, b); });
+      for (int c = 1; c < comps.count; ++c) {
+        std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
+        Id edge = cx_.edge_id(s, low[c]);
+        if (r == rs) {
+          cross_edges_[edge] = kBirth1;
+          continue;
+        }
+        std::uint32_t young = less(r, rs) ? rs : r, old = young == r ? rs : r;
+        desc_[young] = old;
+        cross_edges_[edge] = kDeath0;
+        PersistencePair p;
+        p.dim = 0;
+        p.birth = f_[young];
+        p.death = f_[s];
+        p.birth_simplex = p.birth_vertex = young;
+        p.death_simplex = edge;
+        p.death_vertex = s;
+        out.pairs.push_back(p);
+      }
+    }
+  }
+
+  // The last tetrahedron (in filtration order) of the star of a maximum m.
+  Id last_tet(Id m) const {
+    std::array<Id, 3> best{-1, -1, -1};
+    for (auto& tr : link_.triangles) {
+      auto d = sorted_descending(f_, std::array<Id, 3>{m + delta_[tr[0]], m + delta_[tr[1]], m + delta_[tr[2]]});
+      if (best[0] < 0 || simplex_less(f_, best, d)) best = d;
+    }
+    return cx_.tet_id(m, best[0], best[1], best[2]);
+  }
+
+  void dim2(PersistenceDiagram& out) {
+    struct Item { std::array<Id, 3> tail; int len; int index; };  // lower-star tet (len 3) or triangle (len 2)
+    for (std::uint32_t s : splits_) {
+      std::uint16_t lower, outside;
+      masks(s, lower, outside);
+      std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
+      const auto& ucomps = table_[upper];
+      std::array<int, 14> comp_of;
+      comp_of.fill(-1);
+      std::array<std::uint32_t, 7> global{};
+      for (int c = 0; c < ucomps.count; ++c) {
+        for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
+        global[c] = (ucomps.masks[c] & outside) ? kOutside
+                                                 : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
+      }
+      // Local union-find over the 24 link triangles (tets of the star) and the upper-link components.
+      std::array<int, 31> parent;
+      std::array<int, 31> comp_rep;  // for a root holding an upper component: that component, else -1
+      for (int n = 0; n < 31; ++n) { parent[n] = n; comp_rep[n] = n >= 24 ? n - 24 : -1; }
+      auto node_of = [&](int tri) {
+        auto& t = link_.triangles[tri];
+        for (int q = 0; q < 3; ++q)
+          if (!(lower >> t[q] & 1)) return 24 + comp_of[t[q]];
+        return tri;
+      };
+      auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
+      std::vector<Item> items;
+      items.reserve(60);
+      for (int t = 0; t < 24; ++t) {
+        auto& tr = link_.triangles[t];
+        if ((lower >> tr[0] & 1) && (lower >> tr[1] & 1) && (lower >> tr[2] & 1))
+          items.push_back({sorted_descending(f_, std::array<Id, 3>{s + delta_[tr[0]], s + delta_[tr[1]], s + delta_[tr[2]]}), 3, t});
+      }
+      for (int e = 0; e < 36; ++e) {
+        auto& ed = link_.edges[e];
+        if ((lower >> ed[0] & 1) && (lower >> ed[1] & 1)) {
+          auto d = sorted_descending(f_, std::array<Id, 2>{s + delta_[ed[0]], s + delta_[ed[1]]});
+          items.push_back({{d[0], d[1], -1}, 2, e});
+        }
+      }
+      auto item_less = [this](const Item& a, const Item& b) {
+        for (int i = 0; i < std::min(a.len, b.len); ++i)
+          if (a.tail[i] != b.tail[i]) return less(a.tail[i], b.tail[i]);
+        return a.len < b.len;
+      };
+      std::sort(items.begin(), items.end(), [&](const Item& a, const Item& b) { return item_less(b, a); });
+      for (const Item& it : items) {
+        if (it.len == 3) continue;  // a tetrahedron is born as its own node
+        const auto& et = link_.edge_triangles[it.index];
+        int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
+        if (r1 == r2) continue;
+        if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0) {
+          std::uint32_t g1 = find(asc_, root_up(global[comp_rep[r1]]));
+          std::uint32_t g2 = find(asc_, root_up(global[comp_rep[r2]]));
+          Id tri = cx_.triangle_id(s, it.tail[0], it.tail[1]);
+          if (g1 != g2) {
+            bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
+            std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
+            asc_[young] = old;
+            PersistencePair p;
+            p.dim = 2;
+            p.birth = f_[s];
+            p.death = f_[young];
+            p.birth_simplex = tri;
+            p.birth_vertex = s;
+            p.death_simplex = last_tet(young);
+            p.death_vertex = young;
+            out.pairs.push_back(p);
+          } else {
+            deaths1_.push_back({s, it.tail[0], it.tail[1]});
+          }
+        }
+        parent[r2] = r1;
+        if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
+      }
+    }
+    std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
+  }
+  std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
+
+  const LowerLinkInfo& lower_link(Id v) {
+    auto it = link_cache_.find(v);
+    if (it != link_cache_.end()) return it->second;
+    LowerLinkInfo info;
+    std::uint16_t outside;
+    masks(v, info.lower, outside);
+    info.killer.fill(-1);
+    info.older.fill(-1);
+    std::array<int, 36> edges;
+    int ne = 0;
+    for (int e = 0; e < 36; ++e)
+      if ((info.lower >> link_.edges[e][0] & 1) && (info.lower >> link_.edges[e][1] & 1)) edges[ne++] = e;
+    auto key = [&](int e) {
+      Id a = v + delta_[link_.edges[e][0]], b = v + delta_[link_.edges[e][1]];
+      return less(a, b) ? EdgeKey{b, a} : EdgeKey{a, b};
+    };
+    std::sort(edges.begin(), edges.begin() + ne, [&](int a, int b) { return edge_less(key(a), key(b)); });
+    std::array<int, 14> parent;
+    for (int n = 0; n < 14; ++n) parent[n] = n;
+    auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
+    for (int i = 0; i < ne; ++i) {
+      int a = lfind(link_.edges[edges[i]][0]), b = lfind(link_.edges[edges[i]][1]);
+      if (a == b) continue;
+      bool a_younger = less(v + delta_[b], v + delta_[a]);
+      int young = a_younger ? a : b, old = a_younger ? b : a;
+      parent[young] = old;
+      info.killer[young] = std::int8_t(edges[i]);
+      info.older[young] = std::int8_t(old);
+    }
+    for (unsigned m = info.lower; m; m &= m - 1) {
+      int n = __builtin_ctz(m);
+      if (info.lowest < 0 || less(v + delta_[n], v + delta_[info.lowest])) info.lowest = std::int8_t(n);
+    }
+    return link_cache_.emplace(v, info).first->second;
+  }
+  bool edge_less(const EdgeKey& a, const EdgeKey& b) const {
+    if (a.hi != b.hi) return less(a.hi, b.hi);
+    return a.lo != b.lo && less(a.lo, b.lo);
+  }
+  EdgeKey make_edge(Id a, Id b) const { return less(a, b) ? EdgeKey{b, a} : EdgeKey{a, b}; }
+
+  // Replaces the pivot (v, x), paired inside v's lower star, by the rest of that pair's cone: the edge
+  // (v, older root) and a lower-link path from x to that root through edges no later than the killer.
+  template <class Push>
+  void expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& push) {
+    int killer = info.killer[x], target = info.older[x];
+    auto killer_key = make_edge(v + delta_[link_.edges[killer][0]], v + delta_[link_.edges[killer][1]]);
+    std::array<int, 14> prev;
+    prev.fill(-2);
+    prev[x] = -1;
+    std::array<int, 14> queue;
+    int head = 0, tail = 0;
+    queue[tail++] = x;
+    while (head < tail && prev[target] == -2) {
+      int a = queue[head++];
+      for (unsigned m = link_.adjacency[a] & info.lower; m; m &= m - 1) {
+        int b = __builtin_ctz(m);
+        if (prev[b] != -2) continue;
+        if (edge_less(killer_key, make_edge(v + delta_[a], v + delta_[b]))) continue;
+        prev[b] = a;
+        queue[tail++] = b;
+      }
+    }
+    if (prev[target] == -2) throw std::logic_error("lower-link path not found in dim-1 reduction");
+    push(make_edge(v, v + delta_[target]));
+    for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
+  }
+
+  void dim1(PersistenceDiagram& out) {
+    std::size_t births = 0;
+    for (auto& kv : cross_edges_) births += kv.second == kBirth1;
+    if (births != deaths1_.size())
+      throw std::logic_error("dim-1 births and deaths do not balance (" + std::to_string(births) + " vs " +
+                             std::to_string(deaths1_.size()) + ")");
+    auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
+    std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)> heap(heap_less);
+    std::unordered_map<Id, std::uint32_t> owner;  // birth edge id -> reduced column
+    std::vector<std::vector<EdgeKey>> columns;
+    std::size_t done = 0;
+    for (const auto& tau : deaths1_) {
+      if ((++done & 1023) == 0) report("dim 1", 0.6 + 0.4 * double(done) / double(deaths1_.size()));
+      heap.push(make_edge(tau[0], tau[1]));
+      heap.push(make_edge(tau[0], tau[2]));
+      heap.push(make_edge(tau[1], tau[2]));
+      bool paired = false;
+      while (!heap.empty()) {
+        EdgeKey p = heap.top();
+        heap.pop();
+        bool odd = true;
+        while (!heap.empty() && heap.top() == p) { heap.pop(); odd = !odd; }
+        if (!odd) continue;
+        const LowerLinkInfo& info = lower_link(p.hi);
+        int x = slot(p.hi, p.lo);
+        if (info.killer[x] >= 0) {
+          expand_local_pair(p.hi, info, x, [&](const EdgeKey& e) { heap.push(e); });
+          continue;
+        }
+        if (x == info.lowest) continue;  // the edge that attaches p.hi: negative, compressed away
+        Id eid = cx_.edge_id(p.hi, p.lo);
+        auto kind = cross_edges_.find(eid);
+        if (kind == cross_edges_.end()) throw std::logic_error("unclassified cross edge in dim-1 reduction");
+        if (kind->second == kDeath0) continue;  // negative edge: compressed away
+        auto own = owner.find(eid);
+        if (own != owner.end()) {
+          for (const EdgeKey& e : columns[own->second])
+            if (!(e == p)) heap.push(e);
+          continue;
+        }
+        std::vector<EdgeKey> column{p};
+        while (!heap.empty()) {
+          EdgeKey q = heap.top();
+          heap.pop();
+          bool q_odd = true;
+          while (!heap.empty() && heap.top() == q) { heap.pop(); q_odd = !q_odd; }
+          if (q_odd) column.push_back(q);
+        }
+        owner.emplace(eid, std::uint32_t(columns.size()));
+        columns.push_back(std::move(column));
+        PersistencePair pr;
+        pr.dim = 1;
+        pr.birth = f_[p.hi];
+        pr.death = f_[tau[0]];
+        pr.birth_simplex = eid;
+        pr.birth_vertex = p.hi;
+        pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
+        pr.death_vertex = tau[0];
+        out.pairs.push_back(pr);
+        paired = true;
+        break;
+      }
+      if (!paired) throw std::logic_error("a dim-1 death triangle reduced to zero");
+    }
+  }
+
+  void finish(PersistenceDiagram& out) {
+    Id gmin = 0;
+    for (Id v = 1; v < V_; ++v)
+      if (less(v, gmin)) gmin = v;
+    PersistencePair e;
+    e.dim = 0;
+    e.birth = f_[gmin];
+    e.death = std::numeric_limits<float>::infinity();
+    e.birth_simplex = e.birth_vertex = gmin;
+    out.essential.push_back(e);
+    auto key = [&](const PersistencePair& p, std::array<Id, 3>& k) {
+      k = {-1, -1, -1};
+      if (p.dim == 0) { k[0] = p.birth_simplex; return 1; }
+      if (p.dim == 1) { auto v = sorted_descending(f_, cx_.edge_vertices(p.birth_simplex)); k = {v[0], v[1], -1}; return 2; }
+      k = sorted_descending(f_, cx_.triangle_vertices(p.birth_simplex));
+      return 3;
+    };
+    tbb::parallel_sort(out.pairs.begin(), out.pairs.end(), [&](const PersistencePair& a, const PersistencePair& b) {
+      if (a.dim != b.dim) return a.dim < b.dim;
+      std::array<Id, 3> ka, kb;
+      int n = key(a, ka);
+      key(b, kb);
+      for (int i = 0; i < n; ++i)
+        if (ka[i] != kb[i]) return less(ka[i], kb[i]);
+      return false;
+    });
+  }
+
+  static constexpr std::uint8_t kDeath0 = 1, kBirth1 = 2;
+  const ScalarGrid& grid_;
+  const float* f_;
+  FreudenthalComplex cx_;
+  Id V_;
+  ProgressFn progress_;
+  const std::vector<detail::LinkComponents>& table_;
+  const freudenthal::Link& link_;
+  std::array<Id, 14> delta_{};
+  std::array<std::int8_t, 27> slot_of_offset_{};
+  std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
+  Id minima_ = 0, maxima_ = 0;
+  std::unordered_map<Id, std::uint8_t> cross_edges_;
+  std::vector<std::array<Id, 3>> deaths1_;  // (highest, middle, lowest) vertices of dim-1 death triangles
+  std::unordered_map<Id, LowerLinkInfo> link_cache_;
+};
+
+}  // namespace
+
+PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress) {
+  validate_grid(grid);
+  Engine engine(grid, progress);
+  return engine.run();
+}
+
+void write_pairs_csv(const PersistenceDiagram& diagram, const std::string& path) {
+  std::FILE* fp = std::fopen(path.c_str(), "w");
+  if (!fp) throw Error("cannot write '" + path + "'");
+  std::fprintf(fp, "dim,birth,death\n");
+  for (auto& p : diagram.essential) std::fprintf(fp, "%d,%.9g,inf\n", p.dim, p.birth);
+  for (auto& p : diagram.pairs) std::fprintf(fp, "%d,%.9g,%.9g\n", p.dim, p.birth, p.death);
+  if (std::fclose(fp) != 0) throw Error("cannot write '" + path + "' (disk full?)");
+}
+
+}  // namespace chokeloops
