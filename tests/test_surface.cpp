@@ -1,0 +1,189 @@
+// Zero-surface extraction on the Freudenthal tets: topology (genus = first Betti number of the solid),
+// orientation, watertightness, determinism, speed; and the PLY/OBJ writers.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "analytic_fields.h"
+#include "chokeloops/mesh_write.h"
+#include "chokeloops/surface.h"
+
+using namespace chokeloops;
+
+namespace {
+ScalarGrid cube_field(int n, const Sdf& sdf, double lo = 0, double hi = 1) {
+  return sample_field({n, n, n}, sdf, {lo, lo, lo}, {hi, hi, hi});
+}
+void expect_closed_topology(const SurfaceStats& s, int components, int genus) {
+  EXPECT_TRUE(s.closed_manifold);
+  EXPECT_EQ(s.boundary_edges, 0);
+  EXPECT_EQ(s.nonmanifold_edges, 0);
+  EXPECT_EQ(s.nonmanifold_vertices, 0);
+  EXPECT_EQ(s.inconsistent_edges, 0);
+  EXPECT_EQ(s.components, components);
+  EXPECT_EQ(s.genus, genus);
+  EXPECT_EQ(s.euler, 2 * s.components - 2 * s.genus);
+  for (int g : s.component_genus) EXPECT_GE(g, 0);
+  EXPECT_GT(s.enclosed_volume, 0);  // outward normals
+}
+}  // namespace
+
+TEST(Surface, SphereIsGenusZeroWithOutwardNormals) {
+  auto g = cube_field(48, analytic::ball(0.3));
+  auto m = extract_zero_surface(g);
+  auto s = surface_stats(m);
+  expect_closed_topology(s, 1, 0);
+  double vol = 4.0 / 3.0 * M_PI * 0.3 * 0.3 * 0.3, area = 4 * M_PI * 0.09;
+  EXPECT_NEAR(s.enclosed_volume, vol, 0.01 * vol);
+  EXPECT_NEAR(s.area, area, 0.03 * area);
+  ASSERT_EQ(m.vertex_edge.size(), m.vertices.size());
+  FreudenthalComplex K(g.dims);
+  for (size_t i = 0; i < m.vertices.size(); ++i) {  // each vertex on a crossing edge, strictly inside it
+    Id e = m.vertex_edge[i];
+    ASSERT_TRUE(K.edge_valid(e));
+    auto ev = K.edge_vertices(e);
+    ASSERT_NE(g.values[ev[0]] <= 0, g.values[ev[1]] <= 0);
+    if (i) ASSERT_LT(m.vertex_edge[i - 1], e);  // ordered by edge id, one vertex per edge
+    auto a = g.world(K.coords(ev[0])), b = g.world(K.coords(ev[1]));
+    double da = 0, db = 0;
+    for (int d = 0; d < 3; ++d) da += std::pow(m.vertices[i][d] - a[d], 2), db += std::pow(m.vertices[i][d] - b[d], 2);
+    ASSERT_GT(std::sqrt(da), 0.5e-3 * g.voxel_size);
+    ASSERT_GT(std::sqrt(db), 0.5e-3 * g.voxel_size);
+  }
+}
+
+TEST(Surface, TorusGenusOne) {
+  auto s = surface_stats(extract_zero_surface(cube_field(64, analytic::torus(0.3, 0.12))));
+  expect_closed_topology(s, 1, 1);
+  double vol = 2 * M_PI * M_PI * 0.3 * 0.12 * 0.12;
+  EXPECT_NEAR(s.enclosed_volume, vol, 0.02 * vol);
+}
+
+TEST(Surface, DoubleTorusGenusTwo) {
+  auto s = surface_stats(extract_zero_surface(cube_field(64, analytic::double_torus())));
+  expect_closed_topology(s, 1, 2);
+  EXPECT_EQ(s.euler, -2);
+}
+
+TEST(Surface, HollowBallIsTwoSpheres) {
+  auto hollow = [](double x, double y, double z) {
+    double r = std::sqrt((x - .5) * (x - .5) + (y - .5) * (y - .5) + (z - .5) * (z - .5));
+    return std::max(r - 0.4, 0.25 - r);
+  };
+  auto s = surface_stats(extract_zero_surface(cube_field(48, hollow)));
+  expect_closed_topology(s, 2, 0);
+  EXPECT_EQ(s.euler, 4);
+  double vol = 4.0 / 3.0 * M_PI * (0.4 * 0.4 * 0.4 - 0.25 * 0.25 * 0.25);
+  EXPECT_NEAR(s.enclosed_volume, vol, 0.02 * vol);  // inner sphere oriented inward (towards the cavity)
+}
+
+TEST(Surface, VaryingTorusAndTangleCubeAndPiercedBall) {
+  auto s1 = surface_stats(extract_zero_surface(cube_field(96, analytic::varying_torus(), -0.3, 1.3)));
+  expect_closed_topology(s1, 1, 1);
+  auto s2 = surface_stats(extract_zero_surface(cube_field(96, analytic::tangle_cube())));
+  EXPECT_TRUE(s2.closed_manifold);
+  EXPECT_EQ(s2.genus, 5);  // the tangle cube is a genus-5 surface
+  EXPECT_EQ(s2.euler, 2 * s2.components - 2 * s2.genus);
+  auto s3 = surface_stats(extract_zero_surface(cube_field(96, analytic::pierced_hollow_ball())));
+  expect_closed_topology(s3, 1, 0);
+}
+
+TEST(Surface, ZeroValuesAreInsideAndStayManifold) {
+  // Quantised field: many vertices exactly 0 (inside); the surface must stay a closed manifold with the
+  // topology of the solid subcomplex.
+  auto g = cube_field(40, analytic::torus(0.3, 0.12));
+  for (auto& v : g.values) v = std::round(v * 40.0f) / 40.0f;
+  auto m = extract_zero_surface(g);
+  auto s = surface_stats(m);
+  EXPECT_TRUE(s.closed_manifold);
+  EXPECT_EQ(s.euler, 2 * s.components - 2 * s.genus);
+  for (auto& t : m.faces) {
+    for (int c = 0; c < 3; ++c) {
+      auto& a = m.vertices[t[c]];
+      auto& b = m.vertices[t[(c + 1) % 3]];
+      double d = std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+      ASSERT_GT(d, 1e-4 * g.voxel_size);
+    }
+  }
+}
+
+TEST(Surface, RandomFieldsSatisfyEulerIdentity) {
+  for (int seed = 1; seed <= 4; ++seed) {
+    auto g = cube_field(40, analytic::random_gaussians(30, seed));
+    // pad: force outside on the border so the surface is closed
+    for (int k = 0; k < 40; ++k)
+      for (int j = 0; j < 40; ++j)
+        for (int i = 0; i < 40; ++i)
+          if (i == 0 || j == 0 || k == 0 || i == 39 || j == 39 || k == 39) g.values[g.index(i, j, k)] = 1;
+    auto s = surface_stats(extract_zero_surface(g));
+    EXPECT_TRUE(s.closed_manifold) << seed;
+    EXPECT_EQ(s.euler, 2 * s.components - 2 * s.genus) << seed;
+  }
+}
+
+TEST(Surface, DeterministicAcrossThreadCounts) {
+  auto g = cube_field(64, analytic::double_torus());
+  SurfaceMesh a, b;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    a = extract_zero_surface(g);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    b = extract_zero_surface(g);
+  }
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.faces, b.faces);
+  EXPECT_EQ(a.vertex_edge, b.vertex_edge);
+}
+
+TEST(Surface, Extracts256CubedQuickly) {
+  // A gyroid with 8 periods across the box: several million triangles.
+  auto gyroid = [](double x, double y, double z) {
+    const double w = 2 * M_PI * 8;
+    return std::sin(w * x) * std::cos(w * y) + std::sin(w * y) * std::cos(w * z) + std::sin(w * z) * std::cos(w * x);
+  };
+  auto g = cube_field(256, gyroid);
+  auto t0 = std::chrono::steady_clock::now();
+  auto m = extract_zero_surface(g);
+  double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("256^3 gyroid: %zu vertices, %zu faces in %.3f s\n", m.vertices.size(), m.faces.size(), sec);
+  EXPECT_GT(m.faces.size(), 2000000u);
+  EXPECT_LT(sec, 2.0);
+  auto s = surface_stats(m);
+  EXPECT_EQ(s.nonmanifold_edges, 0);
+  EXPECT_EQ(s.nonmanifold_vertices, 0);
+  EXPECT_EQ(s.inconsistent_edges, 0);
+
+  auto s2 = surface_stats(extract_zero_surface(cube_field(256, analytic::double_torus())));
+  EXPECT_EQ(s2.genus, 2);
+  EXPECT_TRUE(s2.closed_manifold);
+}
+
+TEST(MeshWrite, PlyAndObjFiles) {
+  auto m = extract_zero_surface(cube_field(24, analytic::ball(0.3)));
+  std::string dir = ::testing::TempDir();
+  write_ply(m, dir + "/surf.ply");
+  std::ifstream in(dir + "/surf.ply", std::ios::binary);
+  std::string all((std::istreambuf_iterator<char>(in)), {});
+  auto end = all.find("end_header\n");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_NE(all.find("element vertex " + std::to_string(m.vertices.size())), std::string::npos);
+  EXPECT_EQ(all.size() - end - 11, m.vertices.size() * 12 + m.faces.size() * 13);
+  std::vector<Polyline3> loops = {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+  write_loops_ply(loops, dir + "/loops.ply");
+  write_loops_obj(loops, dir + "/loops.obj");
+  std::ifstream o(dir + "/loops.obj");
+  std::string obj((std::istreambuf_iterator<char>(o)), {});
+  EXPECT_NE(obj.find("o loop_1\n"), std::string::npos);
+  EXPECT_NE(obj.find("l 4 5 6 7 4\n"), std::string::npos);
+  std::ifstream lp(dir + "/loops.ply", std::ios::binary);
+  std::string ply((std::istreambuf_iterator<char>(lp)), {});
+  EXPECT_NE(ply.find("element edge 7"), std::string::npos);
+  EXPECT_THROW(write_ply(m, "/nonexistent-dir/x.ply"), Error);
+}
