@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <queue>
 #include <unordered_map>
 
@@ -61,6 +62,7 @@ struct LowerLinkInfo {
   std::int8_t lowest = -1;                 // neighbour slot of the lowest lower neighbour
   std::array<std::int8_t, 14> killer{};    // link edge index that killed slot n, or -1 for a root
   std::array<std::int8_t, 14> older{};     // the older root it merged into
+  std::uint16_t births = 0;                // roots x whose cross edge (v, x) gives birth to a 1-cycle
 };
 
 class Engine {
@@ -122,6 +124,16 @@ class Engine {
       if (border && !cx_.neighbor_inside(c, n)) { outside |= std::uint16_t(1u << n); continue; }
       if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
     }
+  }
+  // Rank (0 = lowest) of each in-box link slot of v among its lower neighbours; -1 for the others.
+  void lower_ranks(Id v, std::uint16_t lower, std::array<std::int8_t, 14>& rank) const {
+    std::array<int, 14> order;
+    int n = 0;
+    for (unsigned m = lower; m; m &= m - 1) order[n++] = __builtin_ctz(m);
+    for (int i = 1; i < n; ++i)
+      for (int j = i; j > 0 && less(v + delta_[order[j]], v + delta_[order[j - 1]]); --j) std::swap(order[j], order[j - 1]);
+    rank.fill(-1);
+    for (int i = 0; i < n; ++i) rank[order[i]] = std::int8_t(i);
   }
   int slot(Id v, Id x) const {
     auto a = cx_.coords(v), b = cx_.coords(x);
@@ -220,12 +232,12 @@ class Engine {
         std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
         Id edge = cx_.edge_id(s, low[c]);
         if (r == rs) {
-          cross_edges_[edge] = kBirth1;
+          birth_slots_[s] |= std::uint16_t(1u << slot(s, low[c]));
+          ++births1_;
           continue;
         }
         std::uint32_t young = less(r, rs) ? rs : r, old = young == r ? rs : r;
         desc_[young] = old;
-        cross_edges_[edge] = kDeath0;
         PersistencePair p;
         p.dim = 0;
         p.birth = f_[young];
@@ -248,120 +260,142 @@ class Engine {
     return cx_.tet_id(m, best[0], best[1], best[2]);
   }
 
-  void dim2(PersistenceDiagram& out) {
-    struct Item { std::array<Id, 3> tail; int len; int index; };  // lower-star tet (len 3) or triangle (len 2)
-    for (std::uint32_t s : splits_) {
-      std::uint16_t lower, outside;
-      masks(s, lower, outside);
-      std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
-      const auto& ucomps = table_[upper];
-      std::array<int, 14> comp_of;
-      comp_of.fill(-1);
-      std::array<std::uint32_t, 7> global{};
-      for (int c = 0; c < ucomps.count; ++c) {
-        for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
-        global[c] = (ucomps.masks[c] & outside) ? kOutside
-                                                 : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
-      }
-      // Local union-find over the 24 link triangles (tets of the star) and the upper-link components.
-      std::array<int, 31> parent;
-      std::array<int, 31> comp_rep;  // for a root holding an upper component: that component, else -1
-      for (int n = 0; n < 31; ++n) { parent[n] = n; comp_rep[n] = n >= 24 ? n - 24 : -1; }
-      auto node_of = [&](int tri) {
-        auto& t = link_.triangles[tri];
-        for (int q = 0; q < 3; ++q)
-          if (!(lower >> t[q] & 1)) return 24 + comp_of[t[q]];
-        return tri;
-      };
-      auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
-      std::vector<Item> items;
-      items.reserve(60);
-      for (int t = 0; t < 24; ++t) {
-        auto& tr = link_.triangles[t];
-        if ((lower >> tr[0] & 1) && (lower >> tr[1] & 1) && (lower >> tr[2] & 1))
-          items.push_back({sorted_descending(f_, std::array<Id, 3>{s + delta_[tr[0]], s + delta_[tr[1]], s + delta_[tr[2]]}), 3, t});
-      }
-      for (int e = 0; e < 36; ++e) {
-        auto& ed = link_.edges[e];
-        if ((lower >> ed[0] & 1) && (lower >> ed[1] & 1)) {
-          auto d = sorted_descending(f_, std::array<Id, 2>{s + delta_[ed[0]], s + delta_[ed[1]]});
-          items.push_back({{d[0], d[1], -1}, 2, e});
-        }
-      }
-      auto item_less = [this](const Item& a, const Item& b) {
-        for (int i = 0; i < std::min(a.len, b.len); ++i)
-          if (a.tail[i] != b.tail[i]) return less(a.tail[i], b.tail[i]);
-        return a.len < b.len;
-      };
-      std::sort(items.begin(), items.end(), [&](const Item& a, const Item& b) { return item_less(b, a); });
-      for (const Item& it : items) {
-        if (it.len == 3) continue;  // a tetrahedron is born as its own node
-        const auto& et = link_.edge_triangles[it.index];
-        int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
-        if (r1 == r2) continue;
-        if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0) {
-          std::uint32_t g1 = find(asc_, root_up(global[comp_rep[r1]]));
-          std::uint32_t g2 = find(asc_, root_up(global[comp_rep[r2]]));
-          Id tri = cx_.triangle_id(s, it.tail[0], it.tail[1]);
-          if (g1 != g2) {
-            bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
-            std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
-            asc_[young] = old;
-            PersistencePair p;
-            p.dim = 2;
-            p.birth = f_[s];
-            p.death = f_[young];
-            p.birth_simplex = tri;
-            p.birth_vertex = s;
-            p.death_simplex = last_tet(young);
-            p.death_vertex = young;
-            out.pairs.push_back(p);
-          } else {
-            deaths1_.push_back({s, it.tail[0], it.tail[1]});
-          }
-        }
-        parent[r2] = r1;
-        if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
+  // A triangle of a split saddle's lower star that joins two upper-link components: it either gives
+  // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = a vertex of each component.
+  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; };
+
+  // Replays the lower star of split saddle s on the dual graph, in reverse filtration order, with each
+  // upper-link component as one old node; needs no global state, so all saddles run in parallel.
+  void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const {
+    std::uint16_t lower, outside;
+    masks(s, lower, outside);
+    std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
+    const auto& ucomps = table_[upper];
+    std::array<int, 14> comp_of;
+    comp_of.fill(-1);
+    std::array<std::uint32_t, 7> rep{};
+    for (int c = 0; c < ucomps.count; ++c) {
+      for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
+      rep[c] = (ucomps.masks[c] & outside) ? kOutside : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
+    }
+    std::array<std::int8_t, 14> rank;
+    lower_ranks(s, lower, rank);
+    // Items keyed by the descending local ranks of their lower vertices; a face (prefix) sorts first.
+    struct Item { std::uint32_t key; int index; bool tet; };
+    std::array<Item, 60> items;
+    int ni = 0;
+    for (int t = 0; t < 24; ++t) {
+      auto& tr = link_.triangles[t];
+      if ((lower >> tr[0] & 1) && (lower >> tr[1] & 1) && (lower >> tr[2] & 1)) {
+        std::array<int, 3> r{rank[tr[0]], rank[tr[1]], rank[tr[2]]};
+        std::sort(r.begin(), r.end(), std::greater<int>());
+        items[ni++] = {std::uint32_t(((r[0] + 1) << 10) | ((r[1] + 1) << 5) | (r[2] + 1)), t, true};
       }
     }
+    for (int e = 0; e < 36; ++e) {
+      auto& ed = link_.edges[e];
+      if ((lower >> ed[0] & 1) && (lower >> ed[1] & 1)) {
+        int hi = std::max(rank[ed[0]], rank[ed[1]]), lo = std::min(rank[ed[0]], rank[ed[1]]);
+        items[ni++] = {std::uint32_t(((hi + 1) << 10) | ((lo + 1) << 5)), e, false};
+      }
+    }
+    std::sort(items.begin(), items.begin() + ni, [](const Item& a, const Item& b) { return a.key > b.key; });
+    std::array<int, 31> parent;
+    std::array<int, 31> comp_rep;  // for a root holding an upper component: that component, else -1
+    for (int n = 0; n < 31; ++n) { parent[n] = n; comp_rep[n] = n >= 24 ? n - 24 : -1; }
+    auto node_of = [&](int tri) {
+      auto& t = link_.triangles[tri];
+      for (int q = 0; q < 3; ++q)
+        if (!(lower >> t[q] & 1)) return 24 + comp_of[t[q]];
+      return tri;
+    };
+    auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
+    for (int i = 0; i < ni; ++i) {
+      const Item& it = items[i];
+      if (it.tet) continue;  // a tetrahedron is born as its own node
+      const auto& et = link_.edge_triangles[it.index];
+      int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
+      if (r1 == r2) continue;
+      if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
+        out.push_back({s, std::uint8_t(link_.edges[it.index][0]), std::uint8_t(link_.edges[it.index][1]),
+                       rep[comp_rep[r1]], rep[comp_rep[r2]]});
+      parent[r2] = r1;
+      if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
+    }
+  }
+
+  void dim2(PersistenceDiagram& out) {
+    // Cross triangles of all split saddles, computed in parallel, kept in saddle order.
+    const std::size_t chunk = 4096, nchunks = (splits_.size() + chunk - 1) / chunk;
+    std::vector<std::vector<CrossTriangle>> found(nchunks);
+    tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+      for (std::size_t i = c * chunk; i < std::min(splits_.size(), (c + 1) * chunk); ++i)
+        split_saddle_cross_triangles(splits_[i], found[c]);
+    });
+    for (auto& list : found)
+      for (const CrossTriangle& ct : list) {
+        std::uint32_t g1 = find(asc_, root_up(ct.rep1)), g2 = find(asc_, root_up(ct.rep2));
+        Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
+        if (g1 == g2) {
+          auto d = sorted_descending(f_, std::array<Id, 3>{s, a, b});
+          deaths1_.push_back(d);
+          continue;
+        }
+        bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
+        std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
+        asc_[young] = old;
+        PersistencePair p;
+        p.dim = 2;
+        p.birth = f_[s];
+        p.death = f_[young];
+        p.birth_simplex = cx_.triangle_id(s, a, b);
+        p.birth_vertex = s;
+        p.death_simplex = last_tet(young);
+        p.death_vertex = young;
+        out.pairs.push_back(p);
+      }
     std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
   }
   std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
 
   const LowerLinkInfo& lower_link(Id v) {
-    auto it = link_cache_.find(v);
-    if (it != link_cache_.end()) return it->second;
+    std::uint32_t& slot_index = link_index_[v];
+    if (slot_index != kOutside) return link_infos_[slot_index];
     LowerLinkInfo info;
     std::uint16_t outside;
     masks(v, info.lower, outside);
     info.killer.fill(-1);
     info.older.fill(-1);
-    std::array<int, 36> edges;
+    std::array<std::int8_t, 14> rank;
+    lower_ranks(v, info.lower, rank);
+    std::array<std::pair<int, int>, 36> edges;  // (key from local ranks, link edge)
     int ne = 0;
-    for (int e = 0; e < 36; ++e)
-      if ((info.lower >> link_.edges[e][0] & 1) && (info.lower >> link_.edges[e][1] & 1)) edges[ne++] = e;
-    auto key = [&](int e) {
-      Id a = v + delta_[link_.edges[e][0]], b = v + delta_[link_.edges[e][1]];
-      return less(a, b) ? EdgeKey{b, a} : EdgeKey{a, b};
-    };
-    std::sort(edges.begin(), edges.begin() + ne, [&](int a, int b) { return edge_less(key(a), key(b)); });
+    for (int e = 0; e < 36; ++e) {
+      int a = link_.edges[e][0], b = link_.edges[e][1];
+      if ((info.lower >> a & 1) && (info.lower >> b & 1))
+        edges[ne++] = {(std::max(rank[a], rank[b]) << 4) | std::min(rank[a], rank[b]), e};
+    }
+    std::sort(edges.begin(), edges.begin() + ne);
     std::array<int, 14> parent;
     for (int n = 0; n < 14; ++n) parent[n] = n;
     auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
     for (int i = 0; i < ne; ++i) {
-      int a = lfind(link_.edges[edges[i]][0]), b = lfind(link_.edges[edges[i]][1]);
+      int e = edges[i].second;
+      int a = lfind(link_.edges[e][0]), b = lfind(link_.edges[e][1]);
       if (a == b) continue;
-      bool a_younger = less(v + delta_[b], v + delta_[a]);
+      bool a_younger = rank[a] > rank[b];
       int young = a_younger ? a : b, old = a_younger ? b : a;
       parent[young] = old;
-      info.killer[young] = std::int8_t(edges[i]);
+      info.killer[young] = std::int8_t(e);
       info.older[young] = std::int8_t(old);
     }
-    for (unsigned m = info.lower; m; m &= m - 1) {
-      int n = __builtin_ctz(m);
-      if (info.lowest < 0 || less(v + delta_[n], v + delta_[info.lowest])) info.lowest = std::int8_t(n);
-    }
-    return link_cache_.emplace(v, info).first->second;
+    for (int n = 0; n < 14; ++n)
+      if (rank[n] == 0) info.lowest = std::int8_t(n);
+    auto births = birth_slots_.find(v);
+    if (births != birth_slots_.end()) info.births = births->second;
+    slot_index = std::uint32_t(link_infos_.size());
+    link_infos_.push_back(info);
+    return link_infos_.back();
   }
   bool edge_less(const EdgeKey& a, const EdgeKey& b) const {
     if (a.hi != b.hi) return less(a.hi, b.hi);
@@ -397,15 +431,15 @@ class Engine {
   }
 
   void dim1(PersistenceDiagram& out) {
-    std::size_t births = 0;
-    for (auto& kv : cross_edges_) births += kv.second == kBirth1;
-    if (births != deaths1_.size())
-      throw std::logic_error("dim-1 births and deaths do not balance (" + std::to_string(births) + " vs " +
+    if (births1_ != deaths1_.size())
+      throw std::logic_error("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                              std::to_string(deaths1_.size()) + ")");
+    link_index_.assign(V_, kOutside);
     auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
     std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)> heap(heap_less);
     std::unordered_map<Id, std::uint32_t> owner;  // birth edge id -> reduced column
-    std::vector<std::vector<EdgeKey>> columns;
+    std::vector<EdgeKey> column_entries;  // reduced columns of paired death triangles, back to back
+    std::vector<std::size_t> column_start{0};
     std::size_t done = 0;
     for (const auto& tau : deaths1_) {
       if ((++done & 1023) == 0) report("dim 1", 0.6 + 0.4 * double(done) / double(deaths1_.size()));
@@ -425,27 +459,25 @@ class Engine {
           expand_local_pair(p.hi, info, x, [&](const EdgeKey& e) { heap.push(e); });
           continue;
         }
-        if (x == info.lowest) continue;  // the edge that attaches p.hi: negative, compressed away
+        // A root's edge is negative (it attaches p.hi, or merges two components): compressed away.
+        if (!(info.births >> x & 1)) continue;
         Id eid = cx_.edge_id(p.hi, p.lo);
-        auto kind = cross_edges_.find(eid);
-        if (kind == cross_edges_.end()) throw std::logic_error("unclassified cross edge in dim-1 reduction");
-        if (kind->second == kDeath0) continue;  // negative edge: compressed away
         auto own = owner.find(eid);
         if (own != owner.end()) {
-          for (const EdgeKey& e : columns[own->second])
-            if (!(e == p)) heap.push(e);
+          for (std::size_t i = column_start[own->second]; i < column_start[own->second + 1]; ++i)
+            if (!(column_entries[i] == p)) heap.push(column_entries[i]);
           continue;
         }
-        std::vector<EdgeKey> column{p};
+        owner.emplace(eid, std::uint32_t(column_start.size() - 1));
+        column_entries.push_back(p);
         while (!heap.empty()) {
           EdgeKey q = heap.top();
           heap.pop();
           bool q_odd = true;
           while (!heap.empty() && heap.top() == q) { heap.pop(); q_odd = !q_odd; }
-          if (q_odd) column.push_back(q);
+          if (q_odd) column_entries.push_back(q);
         }
-        owner.emplace(eid, std::uint32_t(columns.size()));
-        columns.push_back(std::move(column));
+        column_start.push_back(column_entries.size());
         PersistencePair pr;
         pr.dim = 1;
         pr.birth = f_[p.hi];
@@ -472,25 +504,11 @@ class Engine {
     e.death = std::numeric_limits<float>::infinity();
     e.birth_simplex = e.birth_vertex = gmin;
     out.essential.push_back(e);
-    auto key = [&](const PersistencePair& p, std::array<Id, 3>& k) {
-      k = {-1, -1, -1};
-      if (p.dim == 0) { k[0] = p.birth_simplex; return 1; }
-      if (p.dim == 1) { auto v = sorted_descending(f_, cx_.edge_vertices(p.birth_simplex)); k = {v[0], v[1], -1}; return 2; }
-      k = sorted_descending(f_, cx_.triangle_vertices(p.birth_simplex));
-      return 3;
-    };
-    tbb::parallel_sort(out.pairs.begin(), out.pairs.end(), [&](const PersistencePair& a, const PersistencePair& b) {
-      if (a.dim != b.dim) return a.dim < b.dim;
-      std::array<Id, 3> ka, kb;
-      int n = key(a, ka);
-      key(b, kb);
-      for (int i = 0; i < n; ++i)
-        if (ka[i] != kb[i]) return less(ka[i], kb[i]);
-      return false;
-    });
+    // Discovery order is deterministic (saddles in filtration order); group by dimension.
+    std::stable_sort(out.pairs.begin(), out.pairs.end(),
+                     [](const PersistencePair& a, const PersistencePair& b) { return a.dim < b.dim; });
   }
 
-  static constexpr std::uint8_t kDeath0 = 1, kBirth1 = 2;
   const ScalarGrid& grid_;
   const float* f_;
   FreudenthalComplex cx_;
@@ -502,9 +520,11 @@ class Engine {
   std::array<std::int8_t, 27> slot_of_offset_{};
   std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
   Id minima_ = 0, maxima_ = 0;
-  std::unordered_map<Id, std::uint8_t> cross_edges_;
+  std::unordered_map<Id, std::uint16_t> birth_slots_;  // join saddle -> link slots of its dim-1 birth edges
+  std::size_t births1_ = 0;
   std::vector<std::array<Id, 3>> deaths1_;  // (highest, middle, lowest) vertices of dim-1 death triangles
-  std::unordered_map<Id, LowerLinkInfo> link_cache_;
+  std::vector<std::uint32_t> link_index_;  // per vertex: index into link_infos_, or kOutside if not computed
+  std::deque<LowerLinkInfo> link_infos_;
 };
 
 }  // namespace

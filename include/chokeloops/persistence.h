@@ -36,7 +36,7 @@ struct PersistenceStats {
 
 struct PersistenceDiagram {
   std::array<int, 3> dims{0, 0, 0};
-  std::vector<PersistencePair> pairs;  // finite pairs, sorted by (dim, birth simplex order)
+  std::vector<PersistencePair> pairs;  // finite pairs grouped by dim, in a deterministic discovery order
   std::vector<PersistencePair> essential;  // the essential classes (one dim-0 class for a box)
   PersistenceStats stats;
   std::size_t count(int dim) const;
