@@ -10,8 +10,6 @@
 
 namespace chokeloops {
 
-using Polyline3 = std::vector<std::array<double, 3>>;
-
 // element vertex (float x,y,z), element face (list uchar int vertex_indices).
 void write_ply(const SurfaceMesh& mesh, const std::string& path);
 

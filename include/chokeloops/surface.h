@@ -25,6 +25,8 @@
 
 namespace chokeloops {
 
+using Polyline3 = std::vector<std::array<double, 3>>;  // a closed polyline (last point != first)
+
 struct SurfaceMesh {
   std::vector<std::array<double, 3>> vertices;  // world coordinates
   std::vector<std::array<int, 3>> faces;        // counter-clockwise seen from outside

@@ -1,0 +1,53 @@
+#pragma once
+// Topological checks of loops on a SurfaceMesh, used by tests and by the loop stage's self-checks:
+// contractibility (CGAL Surface_mesh_topology, on the connected component that holds the loop) and
+// separation (does cutting along the loop split its component?). A loop is a cyclic sequence of surface
+// vertex indices, consecutive ones (and the last and the first) joined by mesh edges; the first vertex is
+// not repeated at the end.
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "chokeloops/surface.h"
+
+namespace chokeloops {
+
+// Builds the per-component structures once, for many queries on one mesh. Throws Error when a loop is
+// empty, uses an index out of range, or two consecutive vertices are not joined by a mesh edge.
+class SurfaceTopology {
+ public:
+  explicit SurfaceTopology(const SurfaceMesh& mesh);
+  ~SurfaceTopology();
+  SurfaceTopology(const SurfaceTopology&) = delete;
+  SurfaceTopology& operator=(const SurfaceTopology&) = delete;
+
+  // Null-homotopic on the surface (CGAL::Surface_mesh_topology::Curves_on_surface_topology).
+  bool contractible(const std::vector<int>& loop);
+  // Removing the loop's edges splits the loop's component into more face-connected parts.
+  bool separates(const std::vector<int>& loop);
+  // Component (face_components numbering) that holds vertex v, -1 for an isolated vertex.
+  int component_of_vertex(int v) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+bool loop_is_contractible(const SurfaceMesh& mesh, const std::vector<int>& loop);
+bool loop_separates_surface(const SurfaceMesh& mesh, const std::vector<int>& loop);
+
+// True when every vertex of the loop occurs once and the loop has at least 3 vertices.
+bool loop_is_simple(const std::vector<int>& loop);
+
+// Turns a closed polyline lying on (or very near) the surface into a closed edge path: the nearest mesh
+// vertex of every point, joined by shortest edge paths (Dijkstra over the part of the mesh near the
+// polyline), with repeated vertices and back-and-forth spurs removed. When `component` >= 0, only vertices
+// of that component are used. The result is a cyclic vertex list (first vertex not repeated).
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component = -1);
+
+// Length of a closed polyline (including the closing segment) and of a closed vertex loop.
+double closed_length(const Polyline3& polyline);
+double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop);
+Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop);
+
+}  // namespace chokeloops
