@@ -198,7 +198,7 @@ function buildScene(pos, idx, loops) {
     visible.renderOrder = 3;
     visible.userData.loopId = l.id;
     const halo = new THREE.Mesh(new THREE.TubeGeometry(curve, segs, tubeR * 2.1, 8, closed),
-      new THREE.MeshBasicMaterial({ color: HIGHLIGHT, side: THREE.BackSide, transparent: true, opacity: 0.95, depthTest: false, depthWrite: false }));
+      new THREE.MeshBasicMaterial({ color: HIGHLIGHT, side: THREE.BackSide, transparent: true, opacity: 0.9, depthTest: false, depthWrite: false }));
     halo.renderOrder = 1; halo.visible = false;
     const group = new THREE.Group();
     group.add(hidden, visible, halo);
@@ -213,7 +213,7 @@ function buildScene(pos, idx, loops) {
     }
     const lbox = new THREE.Box3().setFromPoints(pts);
     scene.add(group);
-    loopObjs.set(l.id, { group, halo, visible, loop: l, sphere: lbox.getBoundingSphere(new THREE.Sphere()) });
+    loopObjs.set(l.id, { group, halo, hidden, visible, loop: l, sphere: lbox.getBoundingSphere(new THREE.Sphere()) });
   }
 
   // Default view: look along the direction in which the loops spread least (so they are seen face-on),
@@ -262,11 +262,37 @@ function buildScene(pos, idx, loops) {
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
   }
+  // Points whose projection must fit in the default view: a sample of the surface and all loop points.
+  const fitPoints = [];
+  {
+    const nv = pos.length / 3, step = Math.max(1, Math.floor(nv / 30000));
+    for (let i = 0; i < nv; i += step) fitPoints.push(new THREE.Vector3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]));
+    for (const l of loops) for (const p of l.points) fitPoints.push(new THREE.Vector3(p[0], p[1], p[2]));
+    if (!fitPoints.length) fitPoints.push(sphere.center.clone());
+  }
   function resetView() {
     resize();
-    camera.position.copy(sphere.center).addScaledVector(viewDir, fitDistance(sphere.radius));
-    camera.lookAt(sphere.center);
-    if (controls) { controls.target.copy(sphere.center); controls.update(); }
+    // Centre the projected extent and move back until every point is inside the frustum (with a margin).
+    const right = new THREE.Vector3().crossVectors(up, viewDir).normalize();
+    const upv = new THREE.Vector3().crossVectors(viewDir, right).normalize();
+    let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+    for (const p of fitPoints) {
+      const d = p.clone().sub(sphere.center);
+      const x = d.dot(right), y = d.dot(upv);
+      x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
+    }
+    const center = sphere.center.clone().addScaledVector(right, (x0 + x1) / 2).addScaledVector(upv, (y0 + y1) / 2);
+    const tv = Math.tan((camera.fov * Math.PI) / 360) * 0.92, th = tv * camera.aspect;
+    let dist = 0;
+    for (const p of fitPoints) {
+      const d = p.clone().sub(center);
+      const z = d.dot(viewDir);
+      dist = Math.max(dist, Math.abs(d.dot(right)) / th + z, Math.abs(d.dot(upv)) / tv + z);
+    }
+    dist = Math.max(dist, sphere.radius * 0.05);
+    camera.position.copy(center).addScaledVector(viewDir, dist);
+    camera.lookAt(center);
+    if (controls) { controls.target.copy(center); controls.update(); }
     render();
   }
   let pending = false;
@@ -316,7 +342,11 @@ function buildScene(pos, idx, loops) {
     renderNow() { resize(); renderer.render(scene, camera); },
     resetView,
     highlight(loop, frame) {
-      for (const o of loopObjs.values()) o.halo.visible = loop != null && o.loop.id === loop.id;
+      for (const o of loopObjs.values()) {
+        const on = loop != null && o.loop.id === loop.id;
+        o.halo.visible = on;
+        o.hidden.material.opacity = on ? 1 : 0.45;  // the selected loop shows whole, through the surface
+      }
       const o = loop && loopObjs.get(loop.id);
       if (o && frame && controls) {
         o.group.visible = true;
@@ -456,6 +486,15 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   };
 }
 
+// Round tick values 0, s, 2s, ... below max, with s = 1, 2 or 5 times a power of ten (about 5 ticks).
+function niceTicks(max) {
+  const raw = max / 5, p = Math.pow(10, Math.floor(Math.log10(raw)));
+  const s = [1, 2, 5, 10].map((m) => m * p).find((v) => v >= raw) || raw;
+  const out = [];
+  for (let k = 0; k * s <= max * (1 + 1e-9) && out.length < 12; k++) out.push(Number((k * s).toPrecision(6)));
+  return out;
+}
+
 function drawDiagram(side, cand, loops, dmax, pmin, points) {
   const W = 400, H = 250, ml = 52, mr = 12, mt = 22, mb = 36;
   const xs = cand.map((p) => p[0]).concat(loops.map((l) => l.depth)).filter(Number.isFinite);
@@ -474,11 +513,13 @@ function drawDiagram(side, cand, loops, dmax, pmin, points) {
   // Axes and ticks.
   root.append(svg('line', { x1: X(0), y1: Y(0), x2: X(xMax), y2: Y(0), stroke: '#444' }));
   root.append(svg('line', { x1: X(0), y1: Y(0), x2: X(0), y2: Y(yMax), stroke: '#444' }));
-  for (let i = 0; i <= 4; i++) {
-    const xv = (xMax / 1.08) * i / 4, yv = (yMax / 1.1) * i / 4;
+  for (const xv of niceTicks(xMax)) {
     const tx = svg('text', { x: X(xv), y: Y(0) + 13, 'font-size': 9.5, 'text-anchor': 'middle', fill: '#555' }); tx.textContent = fmt(xv);
+    root.append(svg('line', { x1: X(xv), y1: Y(0), x2: X(xv), y2: Y(0) + 3, stroke: '#444' }), tx);
+  }
+  for (const yv of niceTicks(yMax)) {
     const ty = svg('text', { x: X(0) - 4, y: Y(yv) + 3, 'font-size': 9.5, 'text-anchor': 'end', fill: '#555' }); ty.textContent = fmt(yv);
-    root.append(svg('line', { x1: X(xv), y1: Y(0), x2: X(xv), y2: Y(0) + 3, stroke: '#444' }), svg('line', { x1: X(0) - 3, y1: Y(yv), x2: X(0), y2: Y(yv), stroke: '#444' }), tx, ty);
+    root.append(svg('line', { x1: X(0) - 3, y1: Y(yv), x2: X(0), y2: Y(yv), stroke: '#444' }), ty);
   }
   const xl = svg('text', { x: (X(0) + X(xMax)) / 2, y: H - 6, 'font-size': 11, 'text-anchor': 'middle' });
   xl.textContent = side === 'handle' ? 'depth (inscribed radius at the choke)' : 'distance (outside, at the choke)';
