@@ -245,6 +245,7 @@ class Engine {
         p.birth_simplex = p.birth_vertex = young;
         p.death_simplex = edge;
         p.death_vertex = s;
+        p.death_lobes = {low[0], low[c]};
         out.pairs.push_back(p);
       }
     }
@@ -262,7 +263,8 @@ class Engine {
 
   // A triangle of a split saddle's lower star that joins two upper-link components: it either gives
   // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = a vertex of each component.
-  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; };
+  // lobe = an in-box vertex of each component (-2 if the component lies wholly outside the box).
+  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; std::int64_t lobe1, lobe2; };
 
   // Replays the lower star of split saddle s on the dual graph, in reverse filtration order, with each
   // upper-link component as one old node; needs no global state, so all saddles run in parallel.
@@ -274,9 +276,12 @@ class Engine {
     std::array<int, 14> comp_of;
     comp_of.fill(-1);
     std::array<std::uint32_t, 7> rep{};
+    std::array<std::int64_t, 7> lobe{};
     for (int c = 0; c < ucomps.count; ++c) {
       for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
       rep[c] = (ucomps.masks[c] & outside) ? kOutside : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
+      unsigned in_box = ucomps.masks[c] & ~outside;
+      lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
     }
     std::array<std::int8_t, 14> rank;
     lower_ranks(s, lower, rank);
@@ -318,7 +323,7 @@ class Engine {
       if (r1 == r2) continue;
       if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
         out.push_back({s, std::uint8_t(link_.edges[it.index][0]), std::uint8_t(link_.edges[it.index][1]),
-                       rep[comp_rep[r1]], rep[comp_rep[r2]]});
+                       rep[comp_rep[r1]], rep[comp_rep[r2]], lobe[comp_rep[r1]], lobe[comp_rep[r2]]});
       parent[r2] = r1;
       if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
     }
@@ -338,7 +343,7 @@ class Engine {
         Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
         if (g1 == g2) {
           auto d = sorted_descending(f_, std::array<Id, 3>{s, a, b});
-          deaths1_.push_back(d);
+          deaths1_.push_back({d, {ct.lobe1, ct.lobe2}});
           continue;
         }
         bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
@@ -352,6 +357,7 @@ class Engine {
         p.birth_vertex = s;
         p.death_simplex = last_tet(young);
         p.death_vertex = young;
+        p.birth_lobes = {ct.lobe1, ct.lobe2};
         out.pairs.push_back(p);
       }
     std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
@@ -441,7 +447,8 @@ class Engine {
     std::vector<EdgeKey> column_entries;  // reduced columns of paired death triangles, back to back
     std::vector<std::size_t> column_start{0};
     std::size_t done = 0;
-    for (const auto& tau : deaths1_) {
+    for (const auto& death : deaths1_) {
+      const auto& tau = death.v;
       if ((++done & 1023) == 0) report("dim 1", 0.6 + 0.4 * double(done) / double(deaths1_.size()));
       heap.push(make_edge(tau[0], tau[1]));
       heap.push(make_edge(tau[0], tau[2]));
@@ -486,6 +493,8 @@ class Engine {
         pr.birth_vertex = p.hi;
         pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
         pr.death_vertex = tau[0];
+        pr.birth_lobes = {p.hi + delta_[info.lowest], p.lo};
+        pr.death_lobes = death.lobes;
         out.pairs.push_back(pr);
         paired = true;
         break;
@@ -522,7 +531,8 @@ class Engine {
   Id minima_ = 0, maxima_ = 0;
   std::unordered_map<Id, std::uint16_t> birth_slots_;  // join saddle -> link slots of its dim-1 birth edges
   std::size_t births1_ = 0;
-  std::vector<std::array<Id, 3>> deaths1_;  // (highest, middle, lowest) vertices of dim-1 death triangles
+  struct Death1 { std::array<Id, 3> v; std::array<Id, 2> lobes; };  // v: highest to lowest vertex
+  std::vector<Death1> deaths1_;
   std::vector<std::uint32_t> link_index_;  // per vertex: index into link_infos_, or kOutside if not computed
   std::deque<LowerLinkInfo> link_infos_;
 };

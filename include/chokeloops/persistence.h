@@ -25,6 +25,11 @@ struct PersistencePair {
   Id death_simplex = -1;       // id of a (dim+1)-simplex, or -1 for an essential class
   Id birth_vertex = -1;        // highest vertex of the birth simplex (linear grid index)
   Id death_vertex = -1;        // highest vertex of the death simplex, -1 if essential
+  // The two sides a critical simplex joins, one vertex of each (linear index; -2 = outside the box):
+  // at a join saddle two lower-link components (below it), at a split saddle two upper-link components.
+  // These seed the membranes: the loop of a choke separates its two lobes.
+  std::array<Id, 2> birth_lobes{-1, -1};  // set for dim 1 (join saddle) and dim 2 (split saddle) births
+  std::array<Id, 2> death_lobes{-1, -1};  // set for dim 0 (join saddle) and dim 1 (split saddle) deaths
   float persistence() const { return death - birth; }
   bool essential() const { return death_simplex < 0; }
 };
