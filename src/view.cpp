@@ -312,8 +312,8 @@ double decimate(TriMesh& mesh, std::size_t max_faces) {
     area += 0.5 * std::sqrt(x * x + y * y + z * z);
   }
   double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-30});
-  // A surface of area A clustered with cells of size h keeps about 2A/h^2 faces.
-  double h = std::max(std::sqrt(2.0 * area / double(max_faces)), extent / 2000000.0);
+  // A surface of area A clustered with cells of size h keeps roughly 2A/h^2 to 4A/h^2 faces.
+  double h = std::max(std::sqrt(3.0 * area / double(max_faces)), extent / 2000000.0);
   for (int attempt = 0; attempt < 60; ++attempt, h *= 1.15) {
     std::unordered_map<std::uint64_t, std::uint32_t> cell_of;
     cell_of.reserve(mesh.vertices.size() / 2);

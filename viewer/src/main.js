@@ -114,7 +114,9 @@ function main() {
   const { data, pos, idx } = readData();
   const report = data.report || {};
   const mesh = data.mesh || {};
-  const loops = (report.loops || []).filter((l) => Array.isArray(l.points));
+  const loops = (report.loops || []).filter((l) => l && Array.isArray(l.points));
+  loops.forEach((l, i) => { if (typeof l.id !== 'number' || !isFinite(l.id)) l.id = i; });
+  if (new Set(loops.map((l) => l.id)).size !== loops.length) loops.forEach((l, i) => { l.id = i; });
   state.loopCount = loops.length;
   state.displayFaces = idx.length / 3;
   state.sourceFaces = mesh.source_faces ?? idx.length / 3;
@@ -124,7 +126,7 @@ function main() {
   const viewer = buildScene(pos, idx, loops);
   const panel = document.getElementById('panel');
   const ui = buildPanel(panel, report, mesh, loops, viewer);
-  buildLegend(document.getElementById('viewport'), loops, viewer);
+  buildLegend(document.getElementById('viewport'), loops, viewer, report);
 
   state.select = (id, opts = {}) => {
     const l = byId.get(id);
@@ -369,8 +371,12 @@ function buildScene(pos, idx, loops) {
   };
 }
 
-function buildLegend(viewport, loops, viewer) {
+function buildLegend(viewport, loops, viewer, report) {
   const legend = $('div', { class: 'legend', 'data-testid': 'legend' });
+  if (state.renderMode) {
+    const g = report.surface && report.surface.genus;
+    legend.append($('div', { class: 'caption', text: `${report.input ?? 'chokeloops'}${g !== undefined ? ` · genus ${g}` : ''} · ${loops.length} loop${loops.length === 1 ? '' : 's'}` }));
+  }
   for (const [cat, color] of Object.entries(COLORS)) {
     const n = loops.filter((l) => category(l) === cat).length;
     const box = $('input', { type: 'checkbox', 'data-testid': `legend-toggle-${cat.replace(' ', '-')}` });
