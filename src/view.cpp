@@ -329,20 +329,28 @@ double decimate(TriMesh& mesh, std::size_t max_faces) {
       s[0] += v[0]; s[1] += v[1]; s[2] += v[2]; s[3] += 1;
       remap[i] = it->second;
     }
+    std::vector<std::array<float, 3>> verts(sums.size());
+    for (std::size_t i = 0; i < sums.size(); ++i)
+      verts[i] = {float(sums[i][0] / sums[i][3]), float(sums[i][1] / sums[i][3]), float(sums[i][2] / sums[i][3])};
+    auto normal = [](const std::array<float, 3>& a, const std::array<float, 3>& b, const std::array<float, 3>& c) {
+      double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      return std::array<double, 3>{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    };
     std::vector<std::array<std::uint32_t, 3>> faces;
     faces.reserve(mesh.faces.size() / 2);
     for (const auto& f : mesh.faces) {
       std::array<std::uint32_t, 3> g{remap[f[0]], remap[f[1]], remap[f[2]]};
       if (g[0] == g[1] || g[1] == g[2] || g[0] == g[2]) continue;
+      // Drop faces that clustering folded over (they shade as dark specks).
+      auto n0 = normal(mesh.vertices[f[0]], mesh.vertices[f[1]], mesh.vertices[f[2]]);
+      auto n1 = normal(verts[g[0]], verts[g[1]], verts[g[2]]);
+      if (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2] <= 0) continue;
       std::rotate(g.begin(), std::min_element(g.begin(), g.end()), g.end());  // canonical, orientation kept
       faces.push_back(g);
     }
     std::sort(faces.begin(), faces.end());
     faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
     if (faces.size() > max_faces) continue;
-    std::vector<std::array<float, 3>> verts(sums.size());
-    for (std::size_t i = 0; i < sums.size(); ++i)
-      verts[i] = {float(sums[i][0] / sums[i][3]), float(sums[i][1] / sums[i][3]), float(sums[i][2] / sums[i][3])};
     mesh.vertices = std::move(verts);
     mesh.faces = std::move(faces);
     return h;

@@ -67,7 +67,7 @@ let seed = 7;
 const rand = () => ((seed = (seed * 16807) % 2147483647) / 2147483647);
 for (const part of parts) {
   const base = verts.length;
-  verts.push(...part.verts);
+  for (const v of part.verts) verts.push(v);
   for (const f of part.faces) faces.push(f.map((i) => i + base));
   for (const l of part.loops) {
     const persistence = round(l.side === 'handle' ? 0.8 * l.r : 0.6 * l.r);
