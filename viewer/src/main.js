@@ -12,6 +12,7 @@ export const COLORS = {
 };
 const HIGHLIGHT = '#ffd500';
 const SURFACE = '#c9c4ba';
+const HIDDEN = 0.55;  // opacity of the parts of loops behind the surface
 
 const state = {
   ready: false, webgl: false, rendered: false, renderMode: false,
@@ -99,6 +100,19 @@ function eigenSym3(m) {
   }
   return [0, 1, 2].map((i) => ({ value: a[i][i], vector: new THREE.Vector3(v[0][i], v[1][i], v[2][i]) }))
     .sort((x, y) => y.value - x.value);
+}
+
+// Loops lie on the surface, so a triangulated surface hides parts of them: move their fragments toward the
+// camera by `pull` (along the view ray: the screen position stays) so that whatever lies within that
+// distance of the surface still shows as visible.
+function pullTowardCamera(material, pull) {
+  material.onBeforeCompile = (shader) => {
+    shader.uniforms.loopPull = { value: pull };
+    shader.vertexShader = 'uniform float loopPull;\n' + shader.vertexShader.replace('#include <project_vertex>',
+      '#include <project_vertex>\nmvPosition.xyz += normalize(-mvPosition.xyz) * loopPull;\ngl_Position = projectionMatrix * mvPosition;');
+  };
+  material.customProgramCacheKey = () => 'chokeloops-pull';
+  return material;
 }
 
 function readData() {
@@ -194,9 +208,9 @@ function buildScene(pos, idx, loops) {
     const segs = Math.min(Math.max(pts.length * 2, 64), 4000);
     const tube = new THREE.TubeGeometry(curve, segs, tubeR, 8, closed);
     const color = new THREE.Color(COLORS[category(l)] || '#888888');
-    const hidden = new THREE.Mesh(tube, new THREE.MeshBasicMaterial({ color, transparent: true, opacity: 0.45, depthTest: false, depthWrite: false }));
+    const hidden = new THREE.Mesh(tube, new THREE.MeshBasicMaterial({ color, transparent: true, opacity: HIDDEN, depthTest: false, depthWrite: false }));
     hidden.renderOrder = 2;
-    const visible = new THREE.Mesh(tube, new THREE.MeshLambertMaterial({ color, emissive: color.clone().multiplyScalar(0.4), transparent: true, opacity: 1, depthWrite: true }));
+    const visible = new THREE.Mesh(tube, pullTowardCamera(new THREE.MeshLambertMaterial({ color, emissive: color.clone().multiplyScalar(0.4), transparent: true, opacity: 1, depthWrite: true }), tubeR * 3));
     visible.renderOrder = 3;
     visible.userData.loopId = l.id;
     const halo = new THREE.Mesh(new THREE.TubeGeometry(curve, segs, tubeR * 2.1, 8, closed),
@@ -207,9 +221,9 @@ function buildScene(pos, idx, loops) {
     if (Array.isArray(l.choke_point) && l.choke_point.length === 3) {
       const ballGeom = new THREE.SphereGeometry(tubeR * 2.3, 16, 12);
       const c = new THREE.Vector3(...l.choke_point);
-      const ballHidden = new THREE.Mesh(ballGeom, new THREE.MeshBasicMaterial({ color: 0x222222, transparent: true, opacity: 0.45, depthTest: false, depthWrite: false }));
+      const ballHidden = new THREE.Mesh(ballGeom, new THREE.MeshBasicMaterial({ color: 0x222222, transparent: true, opacity: HIDDEN, depthTest: false, depthWrite: false }));
       ballHidden.renderOrder = 2; ballHidden.position.copy(c);
-      const ball = new THREE.Mesh(ballGeom, new THREE.MeshLambertMaterial({ color: 0x2a2a2a, transparent: true, opacity: 1 }));
+      const ball = new THREE.Mesh(ballGeom, pullTowardCamera(new THREE.MeshLambertMaterial({ color: 0x2a2a2a, transparent: true, opacity: 1 }), tubeR * 3));
       ball.renderOrder = 3; ball.position.copy(c); ball.userData.loopId = l.id;
       group.add(ballHidden, ball);
     }
@@ -347,7 +361,7 @@ function buildScene(pos, idx, loops) {
       for (const o of loopObjs.values()) {
         const on = loop != null && o.loop.id === loop.id;
         o.halo.visible = on;
-        o.hidden.material.opacity = on ? 1 : 0.45;  // the selected loop shows whole, through the surface
+        o.hidden.material.opacity = on ? 1 : HIDDEN;  // the selected loop shows whole, through the surface
       }
       const o = loop && loopObjs.get(loop.id);
       if (o && frame && controls) {
