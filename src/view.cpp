@@ -454,7 +454,7 @@ std::string find_chromium() {
 std::vector<std::string> chromium_flags(int width, int height) {
   return {"--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
           "--disable-component-update", "--disable-sync", "--disable-quic", "--disable-extensions",
-          "--disable-default-apps", "--hide-scrollbars", "--mute-audio", "--force-device-scale-factor=1",
+          "--disable-default-apps", "--disable-dev-shm-usage", "--hide-scrollbars", "--mute-audio", "--force-device-scale-factor=1",
           "--enable-unsafe-swiftshader",  // software WebGL on machines without a GPU, for this local page only
           "--window-size=" + std::to_string(width) + "," + std::to_string(height)};
 }

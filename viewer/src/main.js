@@ -219,7 +219,7 @@ function buildScene(pos, idx, loops) {
     const group = new THREE.Group();
     group.add(hidden, visible, halo);
     if (Array.isArray(l.choke_point) && l.choke_point.length === 3) {
-      const ballGeom = new THREE.SphereGeometry(tubeR * 2.3, 16, 12);
+      const ballGeom = new THREE.SphereGeometry(tubeR * 1.9, 16, 12);
       const c = new THREE.Vector3(...l.choke_point);
       const ballHidden = new THREE.Mesh(ballGeom, new THREE.MeshBasicMaterial({ color: 0x222222, transparent: true, opacity: HIDDEN, depthTest: false, depthWrite: false }));
       ballHidden.renderOrder = 2; ballHidden.position.copy(c);
@@ -366,7 +366,7 @@ function buildScene(pos, idx, loops) {
       const o = loop && loopObjs.get(loop.id);
       if (o && frame && controls) {
         o.group.visible = true;
-        flyTo(o.sphere.center, Math.max(fitDistance(o.sphere.radius) * 2.2, diag * 0.25));
+        flyTo(o.sphere.center, Math.max(fitDistance(o.sphere.radius) * 3, diag * 0.35));
       } else render();
     },
     setOpacity(v) {

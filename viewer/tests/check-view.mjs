@@ -39,7 +39,7 @@ const browser = await chromium.launch({
   executablePath: process.env.CHOKELOOPS_CHROMIUM || '/usr/bin/chromium',
   headless: true,
   args: ['--no-sandbox', '--disable-gpu', '--no-first-run', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--disable-quic', '--enable-unsafe-swiftshader'],
+    '--disable-component-update', '--disable-sync', '--disable-quic', '--disable-dev-shm-usage', '--enable-unsafe-swiftshader'],
 });
 try {
   const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, deviceScaleFactor: 1 });
