@@ -1,0 +1,158 @@
+// Loop shortening on extracted surfaces: wiggly meridians become geodesic meridians, loops slide to the
+// thinnest section of a varying torus when allowed and stay put when not; the class is kept.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "analytic_fields.h"
+#include "chokeloops/mesh_adjacency.h"
+#include "chokeloops/shorten.h"
+#include "chokeloops/surface.h"
+#include "chokeloops/topology.h"
+
+using namespace chokeloops;
+
+namespace {
+// Meridian of a torus (axis z through c, major radius R) at angle phi, wiggled by `amp` in phi.
+Polyline3 wiggly_meridian(std::array<double, 3> c, double R, double r, double phi, double amp, int waves, int n = 400) {
+  Polyline3 p;
+  for (int i = 0; i < n; ++i) {
+    double s = 2 * M_PI * i / n;
+    double ph = phi + amp * std::sin(waves * s);
+    double rho = R + r * std::cos(s);
+    p.push_back({c[0] + rho * std::cos(ph), c[1] + rho * std::sin(ph), c[2] + r * std::sin(s)});
+  }
+  return p;
+}
+double mean_angle(const Polyline3& p, std::array<double, 3> c) {
+  double sx = 0, sy = 0;
+  for (auto& q : p) sx += q[0] - c[0], sy += q[1] - c[1];
+  return std::atan2(sy, sx);
+}
+// Every point on a face of the mesh (on an edge of the strip, so within a tiny distance of a face plane).
+double max_distance_to_vertices_edges(const SurfaceMesh& m, const Polyline3& p) {
+  double worst = 0;
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (auto& q : p)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], q[d] - 0.02), hi[d] = std::max(hi[d], q[d] + 0.02);
+  std::vector<std::array<int, 3>> near;
+  for (auto& t : m.faces) {
+    auto& a = m.vertices[t[0]];
+    bool in = true;
+    for (int d = 0; d < 3; ++d) in = in && a[d] >= lo[d] && a[d] <= hi[d];
+    if (in) near.push_back(t);
+  }
+  for (auto& q : p) {
+    double best = 1e300;
+    for (auto& t : near)
+      for (int k = 0; k < 3; ++k) {
+        auto& a = m.vertices[t[k]];
+        auto& b = m.vertices[t[(k + 1) % 3]];
+        double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, aq[3] = {q[0] - a[0], q[1] - a[1], q[2] - a[2]};
+        double L = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+        double s = std::clamp((ab[0] * aq[0] + ab[1] * aq[1] + ab[2] * aq[2]) / L, 0.0, 1.0);
+        double d = std::hypot(aq[0] - s * ab[0], aq[1] - s * ab[1], aq[2] - s * ab[2]);
+        best = std::min(best, d);
+      }
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+}  // namespace
+
+TEST(Shorten, WigglyMeridianBecomesGeodesicMeridian) {
+  const double R = 0.3, r = 0.12;
+  auto m = extract_zero_surface(sample_field({128, 128, 128}, analytic::torus(R, r)));
+  auto adj = build_adjacency(m);
+  auto wiggly = wiggly_meridian({0.5, 0.5, 0.5}, R, r, 0.3, 0.12, 5);
+  auto loop = snap_polyline_to_edge_path(m, wiggly);
+  auto t0 = std::chrono::steady_clock::now();
+  ShortenResult res = shorten_loop(m, adj, loop, ShortenOptions{0, 12, 5000});
+  std::printf("shorten: %.3f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  const double target = 2 * M_PI * r;
+  std::printf("meridian: input %.4f edge path %.4f final %.4f (target %.4f) rings %d swaps %d points %zu\n",
+              res.input_length, res.edge_path_length, res.length, target, res.rings, res.swaps, res.points.size());
+  EXPECT_GT(res.rings, 0);
+  EXPECT_LT(res.length, res.edge_path_length);
+  EXPECT_NEAR(res.length, target, 0.03 * target);
+  EXPECT_NEAR(closed_length(res.points), res.length, 1e-9);
+  EXPECT_LT(max_distance_to_vertices_edges(m, res.points), 1e-9);  // points lie on mesh edges
+  // Same class: the edge path is still an essential, non-separating loop.
+  SurfaceTopology topo(m);
+  EXPECT_FALSE(topo.contractible(res.edge_path));
+  EXPECT_FALSE(topo.separates(res.edge_path));
+  auto snapped_back = snap_polyline_to_edge_path(m, res.points);
+  EXPECT_FALSE(topo.contractible(snapped_back));
+  // A meridian lies in a plane through the axis: every point at distance r from the tube's core circle.
+  for (auto& q : res.points) {
+    double rho = std::hypot(q[0] - 0.5, q[1] - 0.5);
+    EXPECT_NEAR(std::hypot(rho - R, q[2] - 0.5), r, 0.01);
+  }
+}
+
+TEST(Shorten, LongitudeTightensToInnerEquator) {
+  // The shortest loop homotopic to the outer equator (length 2*pi*(R+r)) is the inner equator 2*pi*(R-r).
+  const double R = 0.3, r = 0.12;
+  auto m = extract_zero_surface(sample_field({96, 96, 96}, analytic::torus(R, r)));
+  auto adj = build_adjacency(m);
+  Polyline3 top;  // the top circle (z = r), halfway to the inner equator
+  for (int i = 0; i < 300; ++i) {
+    double t = 2 * M_PI * i / 300;
+    top.push_back({0.5 + R * std::cos(t), 0.5 + R * std::sin(t), 0.5 + r});
+  }
+  auto res = shorten_polyline(m, adj, top, ShortenOptions{0, 40, 400});
+  std::printf("longitude: input %.4f edge %.4f final %.4f target %.4f rings %d swaps %d\n", res.input_length,
+              res.edge_path_length, res.length, 2 * M_PI * (R - r), res.rings, res.swaps);
+  EXPECT_NEAR(res.length, 2 * M_PI * (R - r), 0.03 * 2 * M_PI * (R - r));
+}
+
+TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
+  // r(t) = 0.15 + 0.06 cos t around R = 0.5: thinnest (0.09) at t = pi.
+  const int n = 128;
+  auto g = sample_field({n, n, n}, analytic::varying_torus(), {-0.3, -0.3, -0.3}, {1.3, 1.3, 1.3});
+  auto m = extract_zero_surface(g);
+  auto adj = build_adjacency(m);
+  const double t0 = M_PI - 0.5;
+  const double r0 = 0.15 + 0.06 * std::cos(t0);
+  auto start = snap_polyline_to_edge_path(m, wiggly_meridian({0.5, 0.5, 0.5}, 0.5, r0, t0, 0.0, 1));
+  auto far = shorten_loop(m, adj, start, ShortenOptions{0, 60, 400});
+  double ang = mean_angle(far.points, {0.5, 0.5, 0.5});
+  if (ang < 0) ang += 2 * M_PI;
+  std::printf("varying torus: start angle %.3f len %.4f -> angle %.3f len %.4f (thinnest %.4f) rings %d swaps %d\n", t0,
+              far.input_length, ang, far.length, 2 * M_PI * 0.09, far.rings, far.swaps);
+  EXPECT_GT(far.rings, 0);
+  EXPECT_NEAR(ang, M_PI, 2 * g.voxel_size / 0.5);  // within ~2 voxels along the core circle
+  EXPECT_NEAR(far.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
+  // With a short leash the loop shortens but stays near its start.
+  const double leash = 0.05;
+  auto near = shorten_loop(m, adj, start, ShortenOptions{leash, 60, 400});
+  double ang2 = mean_angle(near.points, {0.5, 0.5, 0.5});
+  if (ang2 < 0) ang2 += 2 * M_PI;
+  std::printf("leashed: angle %.3f len %.4f rings %d\n", ang2, near.length, near.rings);
+  EXPECT_LT(near.length, near.input_length);
+  EXPECT_GT(near.length, far.length);
+  EXPECT_LT(std::fabs(ang2 - t0) * 0.5, leash + 2 * g.voxel_size);
+}
+
+TEST(Shorten, DumbbellNeckLoopIsKeptAroundTheNeck) {
+  // A contractible but separating loop around a neck stays around the neck (the band is an annulus).
+  auto m = extract_zero_surface(sample_field({96, 96, 96}, analytic::dumbbell()));
+  auto adj = build_adjacency(m);
+  Polyline3 ring;
+  for (int i = 0; i < 200; ++i) {
+    double t = 2 * M_PI * i / 200;
+    ring.push_back({0.5 + 0.02 * std::sin(3 * t), 0.5 + 0.12 * std::cos(t), 0.5 + 0.12 * std::sin(t)});
+  }
+  auto res = shorten_polyline(m, adj, ring, ShortenOptions{0, 8, 200});
+  std::printf("neck: input %.4f final %.4f target %.4f rings %d\n", res.input_length, res.length, 2 * M_PI * 0.12, res.rings);
+  EXPECT_GT(res.rings, 0);
+  EXPECT_NEAR(res.length, 2 * M_PI * 0.12, 0.03 * 2 * M_PI * 0.12);
+  EXPECT_TRUE(loop_separates_surface(m, res.edge_path));
+}
+
+TEST(Shorten, RejectsBrokenLoops) {
+  auto m = extract_zero_surface(sample_field({24, 24, 24}, analytic::ball(0.3)));
+  EXPECT_THROW(shorten_loop(m, std::vector<int>{}), Error);
+  EXPECT_THROW(shorten_loop(m, std::vector<int>{0, 5, 77, 300}), Error);
+}
