@@ -468,7 +468,16 @@ void render_png(const std::string& outdir, const std::string& png_path, int widt
     throw Error("rendering a PNG needs Chromium, which was not found: install Debian's `chromium` package "
                 "(apt-get install chromium, or scripts/install-deps.sh) or set CHOKELOOPS_CHROMIUM to a Chrome/Chromium binary");
   fs::path html = fs::absolute(fs::path(outdir) / "view.html");
-  if (!fs::exists(html)) write_view_html(outdir);
+  {
+    // (Re)write the page when it is missing or older than what it shows.
+    std::error_code ec;
+    bool stale = !fs::exists(html);
+    for (const char* input : {"loops.json", "surface.ply"}) {
+      fs::path p = fs::path(outdir) / input;
+      if (!stale && fs::exists(p) && fs::last_write_time(p, ec) > fs::last_write_time(html, ec)) stale = true;
+    }
+    if (stale) write_view_html(outdir);
+  }
   fs::path target = fs::absolute(png_path);
   if (target.has_parent_path() && !fs::is_directory(target.parent_path()))
     throw Error("cannot write " + png_path + ": no such directory " + target.parent_path().string());

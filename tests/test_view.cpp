@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
+#include <functional>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -87,6 +89,15 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
+// The JSON the page embeds (loops.json as "report", display mesh facts as "mesh").
+nlohmann::json page_data(const std::string& html) {
+  const std::string open = "<script type=\"application/json\" id=\"chokeloops-data\">";
+  auto a = html.find(open);
+  if (a == std::string::npos) return {};
+  auto b = html.find("</script>", a);
+  return nlohmann::json::parse(html.substr(a + open.size(), b - a - open.size()));
+}
+
 int error_code_of(const std::function<void()>& f) {
   try {
     f();
@@ -108,11 +119,8 @@ TEST(View, WritesOneSelfContainedPage) {
   EXPECT_EQ(html.find("<link"), std::string::npos);
   EXPECT_EQ(html.find("{{"), std::string::npos) << "unfilled template placeholder";
   EXPECT_NE(html.find("<title>chokeloops: thin-torus.obj</title>"), std::string::npos);
-  const std::string open = "<script type=\"application/json\" id=\"chokeloops-data\">";
-  auto a = html.find(open);
-  ASSERT_NE(a, std::string::npos);
-  auto b = html.find("</script>", a);
-  auto data = nlohmann::json::parse(html.substr(a + open.size(), b - a - open.size()));
+  auto data = page_data(html);
+  ASSERT_TRUE(data.is_object());
   EXPECT_EQ(data["report"]["loops"].size(), 4u);
   EXPECT_EQ(data["mesh"]["source_faces"], 2304);
   EXPECT_EQ(data["mesh"]["display_faces"], 2304);
@@ -281,4 +289,18 @@ TEST(RenderPng, CliErrors) {
   r = run(std::string(CHOKELOOPS_CLI) + " view " + q(out));
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::exists(out / "view.html"));
+}
+
+TEST(RenderPng, RewritesAPageOlderThanItsInputs) {
+  REQUIRE_BROWSER();
+  TempDir t;
+  fs::path out = copy_torus(t);
+  write_view_html(out.string());
+  auto report = nlohmann::json::parse(slurp(out / "loops.json"));
+  report["loops"].erase(report["loops"].begin());
+  std::ofstream(out / "loops.json") << report.dump();
+  fs::last_write_time(out / "view.html", fs::last_write_time(out / "loops.json") - std::chrono::hours(1));
+  render_png(out.string(), (t.path / "x.png").string(), 400, 300);
+  EXPECT_EQ(page_data(slurp(out / "view.html"))["report"]["loops"].size(), 3u) << "the page was not rewritten";
+  EXPECT_TRUE(fs::exists(t.path / "x.png"));
 }

@@ -25,7 +25,7 @@ const char* kRenderHelp =
     "usage: chokeloops render OUTDIR [-o FILE.png] [--width W] [--height H]\n\n"
     "Draws the surface and loops that `chokeloops analyze ... -o OUTDIR` wrote into a PNG, with headless\n"
     "Chromium (Debian package `chromium`; or set CHOKELOOPS_CHROMIUM), from a viewpoint that shows the loops.\n"
-    "Writes OUTDIR/view.html first if it is missing.\n\n"
+    "Writes OUTDIR/view.html first if it is missing or older than loops.json / surface.ply.\n\n"
     "  -o, --output FILE   the picture (default OUTDIR/loops.png)\n"
     "  --width W           pixels (default 1200)\n"
     "  --height H          pixels (default 900)\n";

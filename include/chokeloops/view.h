@@ -16,7 +16,7 @@ inline constexpr std::size_t kViewFaceBudget = 300000;
 // Throws Error (exit code 2) when an input is missing or malformed.
 void write_view_html(const std::string& outdir, std::size_t face_budget = kViewFaceBudget);
 
-// Renders OUTDIR/view.html (written first if missing) with headless Chromium into png_path, from the default
+// Renders OUTDIR/view.html (written first if missing or older than its inputs) with headless Chromium into png_path, from the default
 // viewpoint (loops seen face-on, drawn over the surface where hidden). Throws Error when Chromium is
 // missing (install Debian's `chromium`, or set CHOKELOOPS_CHROMIUM to a Chrome/Chromium binary), when an
 // input is missing, or when Chromium fails to write the picture.

@@ -149,6 +149,8 @@ function main() {
     ui.highlight(state.selectedLoop);
   };
   state.setOpacity = (v) => viewer.setOpacity(v);
+  state.screenPosition = (id, k = 0) => viewer.screenPosition(id, k);
+  window.addEventListener('keydown', (e) => { if (e.key === 'Escape') state.select(null); });
   state.categories = Object.keys(COLORS).reduce((o, c) => (o[c] = loops.filter((l) => category(l) === c).length, o), {});
   state.ready = true;
   if (state.renderMode) { viewer.renderNow(); state.rendered = viewer.ok; }
@@ -164,7 +166,7 @@ function buildScene(pos, idx, loops) {
     viewport.append($('div', { class: 'error legend', style: 'top:auto;bottom:10px', 'data-testid': 'webgl-error',
       text: 'WebGL is not available in this browser: the 3D view is off; the table and diagrams still work.' }));
     const noop = () => {};
-    return { ok: false, highlight: noop, setOpacity: noop, renderNow: noop, setCategoryVisible: noop, resetView: noop };
+    return { ok: false, highlight: noop, setOpacity: noop, renderNow: noop, setCategoryVisible: noop, resetView: noop, screenPosition: () => null };
   }
   state.webgl = true;
   renderer.setPixelRatio(state.renderMode ? 1 : Math.min(window.devicePixelRatio || 1, 2));
@@ -355,6 +357,15 @@ function buildScene(pos, idx, loops) {
 
   return {
     ok: true,
+    // Where on the page point k of a loop is drawn (for tests and tools): {x, y} in CSS pixels.
+    screenPosition(id, k) {
+      const o = loopObjs.get(id);
+      if (!o) return null;
+      const p = o.loop.points[((k % o.loop.points.length) + o.loop.points.length) % o.loop.points.length];
+      const v = new THREE.Vector3(p[0], p[1], p[2]).project(camera);
+      const r = canvas.getBoundingClientRect();
+      return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
+    },
     renderNow() { resize(); renderer.render(scene, camera); },
     resetView,
     highlight(loop, frame) {
@@ -461,7 +472,9 @@ function buildPanel(panel, report, mesh, loops, viewer) {
       $('td', { text: String(l.id) }),
       $('td', {}, $('span', { class: `swatch ${l.kind}`, style: `background:${COLORS[cat] || '#888'};margin-right:4px` }), l.side),
       $('td', { text: l.kind }), $('td', { text: fmt(l.depth) }), $('td', { text: fmt(l.persistence) }), $('td', { text: fmt(l.length) }));
+    tr.tabIndex = 0;
     tr.addEventListener('click', () => state.select(l.id));
+    tr.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); state.select(l.id); } });
     rows.set(l.id, tr);
   }
   function fillRows() {

@@ -120,6 +120,23 @@ try {
     }
   }
 
+  // Clicking a loop in the 3D view selects it (the longest tunnel loop, a quarter of the way round: away
+  // from the handle loops in the default view), and Escape clears the selection.
+  const target = loops.filter((l) => l.side === 'tunnel').sort((a, b) => b.length - a.length)[0];
+  if (target) {
+    await page.click('[data-testid=reset-view]');
+    await page.waitForTimeout(200);
+    const at = await page.evaluate((id) => window.chokeloopsView.screenPosition(id, Math.floor(
+      JSON.parse(document.getElementById('chokeloops-data').textContent).report.loops.find((l) => l.id === id).points.length / 4)), target.id);
+    await page.mouse.click(at.x, at.y);
+    const sel3 = await page.evaluate(() => window.chokeloopsView.selectedLoop);
+    result.clicked3d = { loop: target.id, at, selected: sel3 };
+    check(sel3 === target.id, `clicking loop ${target.id} in the 3D view at ${JSON.stringify(at)} selected ${sel3}`);
+    await page.keyboard.press('Escape');
+    const sel4 = await page.evaluate(() => window.chokeloopsView.selectedLoop);
+    check(sel4 === null, `Escape left loop ${sel4} selected`);
+  }
+
   // Surface opacity slider.
   await page.locator('[data-testid=opacity-slider]').fill('0.5');
   const op = await page.evaluate(() => window.chokeloopsView.surfaceOpacity);
