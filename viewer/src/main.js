@@ -426,7 +426,9 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   add('voxel size', report.voxel_size !== undefined ? `${fmt(report.voxel_size)} (${report.units ?? 'input'} units)` : undefined);
   add('grid', report.grid && report.grid.dims ? report.grid.dims.join(' × ') : undefined);
   add('surface', `${surf.vertices ?? mesh.source_vertices} vertices, ${surf.faces ?? mesh.source_faces} faces`);
-  add('d_max', params.d_max !== undefined ? `${params.d_max}${params.d_max_abs !== undefined ? ` = ${fmt(params.d_max_abs)}` : ''}` : undefined);
+  add('d_max', params.d_max !== undefined ? `${params.d_max}` + (params.d_max_abs_handle !== undefined
+    ? ` = ${fmt(params.d_max_abs_handle)} (handle), ${fmt(params.d_max_abs_tunnel)} (tunnel)`
+    : params.d_max_abs !== undefined ? ` = ${fmt(params.d_max_abs)}` : '') : undefined);
   add('δ_min', params.min_persistence !== undefined ? `${params.min_persistence}` +
     (params.min_persistence_abs_handle !== undefined ? ` = ${fmt(params.min_persistence_abs_handle)} (handle), ${fmt(params.min_persistence_abs_tunnel)} (tunnel)` : '') : undefined);
   if (report.timings_ms && report.timings_ms.total !== undefined) add('time', `${fmt(report.timings_ms.total / 1000)} s`);
@@ -500,7 +502,7 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   for (const side of ['handle', 'tunnel']) {
     const cand = Array.isArray(diag[side]) ? diag[side] : [];
     const mine = loops.filter((l) => l.side === side);
-    const dmax = params.d_max_abs;
+    const dmax = Number.isFinite(params[`d_max_abs_${side}`]) ? params[`d_max_abs_${side}`] : params.d_max_abs;
     const pmin = params[`min_persistence_abs_${side}`];
     wrap.append(drawDiagram(side, cand, mine, dmax, pmin, points));
   }

@@ -75,7 +75,7 @@ try {
   check(points === loops.length, `diagrams have ${points} loop points, loops.json has ${loops.length}`);
   for (const side of ['handle', 'tunnel']) {
     check(await page.locator(`[data-testid=diagram-${side}]`).count() === 1, `no ${side} diagram`);
-    if (report.parameters && Number.isFinite(report.parameters.d_max_abs))
+    if (report.parameters && (Number.isFinite(report.parameters.d_max_abs) || Number.isFinite(report.parameters[`d_max_abs_${side}`])))
       check(await page.locator(`[data-testid=threshold-dmax-${side}]`).count() === 1, `no d_max line in the ${side} diagram`);
     if (report.parameters && Number.isFinite(report.parameters[`min_persistence_abs_${side}`]))
       check(await page.locator(`[data-testid=threshold-pmin-${side}]`).count() === 1, `no δ_min line in the ${side} diagram`);
