@@ -129,7 +129,10 @@ function main() {
   const report = data.report || {};
   const mesh = data.mesh || {};
   const loops = (report.loops || []).filter((l) => l && Array.isArray(l.points));
-  loops.forEach((l, i) => { if (typeof l.id !== 'number' || !isFinite(l.id)) l.id = i; });
+  loops.forEach((l, i) => {
+    if (typeof l.id !== 'number' || !isFinite(l.id)) l.id = i;
+    l.points = l.points.filter((p) => Array.isArray(p) && p.length >= 3 && Number.isFinite(p[0]) && Number.isFinite(p[1]) && Number.isFinite(p[2]));
+  });
   if (new Set(loops.map((l) => l.id)).size !== loops.length) loops.forEach((l, i) => { l.id = i; });
   state.loopCount = loops.length;
   state.displayFaces = idx.length / 3;
@@ -201,6 +204,8 @@ function buildScene(pos, idx, loops) {
 
   // Loops: an occluded pass (see-through, faint) and a visible pass; plus a halo for the selected loop.
   const loopObjs = new Map();
+  const ballGeom = new THREE.SphereGeometry(tubeR * 1.9, 16, 12);
+  const haloMaterial = new THREE.MeshBasicMaterial({ color: HIGHLIGHT, side: THREE.BackSide, transparent: true, opacity: 0.9, depthTest: false, depthWrite: false });
   for (const l of loops) {
     let pts = l.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
     if (pts.length > 2 && pts[0].distanceTo(pts[pts.length - 1]) < 1e-12) pts = pts.slice(0, -1);
@@ -215,13 +220,9 @@ function buildScene(pos, idx, loops) {
     const visible = new THREE.Mesh(tube, pullTowardCamera(new THREE.MeshLambertMaterial({ color, emissive: color.clone().multiplyScalar(0.4), transparent: true, opacity: 1, depthWrite: true }), tubeR * 3));
     visible.renderOrder = 3;
     visible.userData.loopId = l.id;
-    const halo = new THREE.Mesh(new THREE.TubeGeometry(curve, segs, tubeR * 2.1, 8, closed),
-      new THREE.MeshBasicMaterial({ color: HIGHLIGHT, side: THREE.BackSide, transparent: true, opacity: 0.9, depthTest: false, depthWrite: false }));
-    halo.renderOrder = 1; halo.visible = false;
     const group = new THREE.Group();
-    group.add(hidden, visible, halo);
-    if (Array.isArray(l.choke_point) && l.choke_point.length === 3) {
-      const ballGeom = new THREE.SphereGeometry(tubeR * 1.9, 16, 12);
+    group.add(hidden, visible);
+    if (Array.isArray(l.choke_point) && l.choke_point.length === 3 && l.choke_point.every(Number.isFinite)) {
       const c = new THREE.Vector3(...l.choke_point);
       const ballHidden = new THREE.Mesh(ballGeom, new THREE.MeshBasicMaterial({ color: 0x222222, transparent: true, opacity: HIDDEN, depthTest: false, depthWrite: false }));
       ballHidden.renderOrder = 2; ballHidden.position.copy(c);
@@ -231,7 +232,14 @@ function buildScene(pos, idx, loops) {
     }
     const lbox = new THREE.Box3().setFromPoints(pts);
     scene.add(group);
-    loopObjs.set(l.id, { group, halo, hidden, visible, loop: l, sphere: lbox.getBoundingSphere(new THREE.Sphere()) });
+    // The halo of the selected loop is made when first needed.
+    const makeHalo = () => {
+      const halo = new THREE.Mesh(new THREE.TubeGeometry(curve, segs, tubeR * 2.1, 8, closed), haloMaterial);
+      halo.renderOrder = 1;
+      group.add(halo);
+      return halo;
+    };
+    loopObjs.set(l.id, { group, halo: null, makeHalo, hidden, visible, loop: l, sphere: lbox.getBoundingSphere(new THREE.Sphere()) });
   }
 
   // Default view: look along the direction in which the loops spread least (so they are seen face-on),
@@ -371,7 +379,8 @@ function buildScene(pos, idx, loops) {
     highlight(loop, frame) {
       for (const o of loopObjs.values()) {
         const on = loop != null && o.loop.id === loop.id;
-        o.halo.visible = on;
+        if (on && !o.halo) o.halo = o.makeHalo();
+        if (o.halo) o.halo.visible = on;
         o.hidden.material.opacity = on ? 1 : HIDDEN;  // the selected loop shows whole, through the surface
       }
       const o = loop && loopObjs.get(loop.id);
