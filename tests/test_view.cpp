@@ -304,3 +304,19 @@ TEST(RenderPng, RewritesAPageOlderThanItsInputs) {
   EXPECT_EQ(page_data(slurp(out / "view.html"))["report"]["loops"].size(), 3u) << "the page was not rewritten";
   EXPECT_TRUE(fs::exists(t.path / "x.png"));
 }
+
+TEST(ViewBrowser, PageWithoutLoopsDiagramOrThresholdsStillWorks) {
+  REQUIRE_BROWSER();
+  TempDir t;
+  fs::path out = copy_torus(t);
+  auto report = nlohmann::json::parse(slurp(out / "loops.json"));
+  report["loops"] = nlohmann::json::array();
+  report.erase("diagram");
+  report.erase("parameters");
+  std::ofstream(out / "loops.json") << report.dump();
+  write_view_html(out.string());
+  auto r = run("node " + q(kViewer / "tests/check-view.mjs") + " " + q(out));
+  EXPECT_EQ(r.code, 0) << r.out;
+  auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(j["shownLoops"], 0);
+}
