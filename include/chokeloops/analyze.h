@@ -1,0 +1,48 @@
+#pragma once
+// The whole job: input → level set → persistence → chokes → surface → loops → report (DESIGN §4).
+// The library entry points know nothing of the command line; `chokeloops analyze` is a thin layer over them.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "chokeloops/chokes.h"
+#include "chokeloops/levelset.h"
+#include "chokeloops/membranes.h"
+#include "chokeloops/persistence.h"
+#include "chokeloops/surface.h"
+
+namespace chokeloops {
+
+struct AnalyzeOptions {
+  LevelSetOptions levelset;
+  bool resolution_auto = false;  // find the coarsest resolution whose surface keeps a closed input's genus
+  ChokeParameters chokes;
+  LoopOptions loops;
+};
+
+struct AnalyzeResult {
+  std::string input;
+  ScalarGrid grid;
+  LevelSetResult levelset_info;  // its grid moved to `grid`
+  PersistenceDiagram diagram;
+  ChokeSet chokes;
+  SurfaceMesh surface;
+  SurfaceStats surface_stats;
+  std::vector<Loop> loops;
+  int input_genus = -1;                   // genus of a closed input mesh, -1 when unknown
+  int resolution = 0;                     // voxels along the longest side actually used (0: voxel size given)
+  std::vector<std::string> warnings;
+  std::map<std::string, double> timings_ms;  // per stage, and "total"
+};
+
+// Runs every stage on a file (mesh or .vdb). Throws Error (2 bad input, 3 resources).
+AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, const ProgressFn& progress = {});
+
+// Runs every stage after the level set on a given signed distance grid (negative inside).
+AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const ProgressFn& progress = {},
+                           const std::string& name = "grid");
+
+// Writes surface.ply, loops.ply, loops.obj and loops.json (DESIGN §5) into outdir (created if missing).
+void write_report(const AnalyzeResult& result, const AnalyzeOptions& options, const std::string& outdir);
+
+}  // namespace chokeloops

@@ -1,0 +1,126 @@
+#include "chokeloops/analyze.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "chokeloops/mesh_adjacency.h"
+
+namespace chokeloops {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+bool is_vdb(const std::string& path) {
+  return path.size() >= 4 && path.compare(path.size() - 4, 4, ".vdb") == 0;
+}
+
+// Surface genus at a given resolution, for the genus guard.
+int surface_genus_at(const std::string& input, LevelSetOptions options, int resolution) {
+  options.resolution = resolution;
+  options.voxel_size = 0;
+  options.quiet = true;
+  options.keep_vdb = false;
+  LevelSetResult ls = make_levelset(input, options);
+  return surface_stats(extract_zero_surface(ls.grid)).genus;
+}
+}  // namespace
+
+AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const ProgressFn& progress,
+                           const std::string& name) {
+  AnalyzeResult r;
+  r.input = name;
+  r.grid = std::move(grid);
+  auto t_start = Clock::now();
+  auto stage = [&](const char* s, double f) {
+    if (progress && !progress(s, f)) throw Error("interrupted");
+  };
+  auto t = Clock::now();
+  r.diagram = lower_star_persistence(r.grid, [&](const char*, double f) { stage("persistence", f); return true; });
+  r.timings_ms["persistence"] = ms_since(t);
+
+  t = Clock::now();
+  stage("chokes", 0);
+  r.chokes = find_chokes(r.grid, r.diagram, options.chokes);
+  r.timings_ms["chokes"] = ms_since(t);
+
+  t = Clock::now();
+  stage("surface", 0);
+  r.surface = extract_zero_surface(r.grid);
+  r.surface_stats = surface_stats(r.surface);
+  r.timings_ms["surface"] = ms_since(t);
+  if (r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold)
+    throw std::logic_error("surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
+                           std::to_string(r.chokes.handle_generators) + " handle generators");
+  if (!r.surface_stats.closed_manifold)
+    r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+
+  t = Clock::now();
+  stage("loops", 0);
+  MeshAdjacency adjacency = build_adjacency(r.surface);
+  r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops);
+  r.timings_ms["loops"] = ms_since(t);
+  int missing = 0;
+  for (auto& l : r.loops) missing += !l.found;
+  if (missing)
+    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (membrane did not close); they are listed with empty points");
+  stage("done", 1);
+  r.timings_ms["total"] = ms_since(t_start);
+  return r;
+}
+
+AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, const ProgressFn& progress) {
+  auto t0 = Clock::now();
+  if (progress && !progress("levelset", 0)) throw Error("interrupted");
+  LevelSetOptions ls_options = options.levelset;
+  ls_options.keep_vdb = false;
+  ls_options.quiet = true;
+  int resolution = ls_options.voxel_size > 0 ? 0 : ls_options.resolution;
+  std::vector<std::string> warnings;
+  int input_genus = -1;
+  if (options.resolution_auto && !is_vdb(input)) {
+    // The coarsest grid whose surface keeps the closed input's genus, from 64 voxels up.
+    ls_options.voxel_size = 0;
+    LevelSetResult probe = make_levelset(input, [&] { auto o = ls_options; o.resolution = 64; return o; }());
+    input_genus = probe.report.closed ? probe.report.genus : -1;
+    resolution = 64;
+    if (input_genus >= 0) {
+      for (int res = 64; res <= 1024; res = int(res * 1.25)) {
+        resolution = res;
+        if (surface_genus_at(input, ls_options, res) == input_genus) break;
+      }
+    } else {
+      resolution = options.levelset.resolution;
+    }
+    ls_options.resolution = resolution;
+  }
+  auto t = Clock::now();
+  LevelSetResult ls = make_levelset(input, ls_options);
+  double levelset_ms = ms_since(t);
+  if (!is_vdb(input) && ls.report.closed) input_genus = ls.report.genus;
+  ScalarGrid grid = std::move(ls.grid);
+  AnalyzeResult r = analyze_grid(std::move(grid), options, progress, input);
+  r.levelset_info = std::move(ls);
+  r.levelset_info.grid = ScalarGrid{};
+  r.input_genus = input_genus;
+  r.resolution = resolution;
+  r.timings_ms["levelset"] = levelset_ms;
+  for (auto& w : r.levelset_info.warnings) warnings.push_back(w);
+  if (input_genus >= 0 && r.surface_stats.genus != input_genus) {
+    // Never a silently different genus: find and name a resolution that keeps it.
+    std::string hint = "--resolution auto";
+    if (resolution > 0) {
+      for (int res = int(resolution * 1.5); res <= 1024; res = int(res * 1.5))
+        if (surface_genus_at(input, ls_options, res) == input_genus) { hint = "--resolution " + std::to_string(res); break; }
+    }
+    warnings.push_back("the grid is too coarse: the input mesh has genus " + std::to_string(input_genus) +
+                       " but its surface at this resolution has genus " + std::to_string(r.surface_stats.genus) +
+                       "; rerun with " + hint);
+  }
+  warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+  r.warnings = warnings;
+  r.timings_ms["total"] = ms_since(t0);
+  return r;
+}
+
+}  // namespace chokeloops

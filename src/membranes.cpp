@@ -1,0 +1,315 @@
+// Membranes and loops by a two-lobe priority flood.
+//
+// Why this construction. DESIGN §3 lists three: the paper's greedy one-ring growth, the separatrix of the
+// choke cell in a discrete gradient, and a priority flood from the two merging pieces. The flood needs no
+// gradient, no tet clusters and no special cases at degenerate saddles; every choke reduces to "which of two
+// seeds reaches this surface vertex first, moving through the solid in filtration order". Measured on the
+// analytic shapes of the tests (dumbbell neck, varying torus at 192^3), its interface meets the surface on
+// the choke's cross-section within a voxel, and the shortened loop is within 1-3% of the true
+// circumference; its cost is that of a flood in a box of radius ~2.5 depth around the choke, so it scales
+// with the loop, not with the grid.
+//
+// Details that matter (from the prototype notes in DESIGN §3): the seeds are exactly the two pieces of
+// {v below the saddle} that the choke simplex joins (the pair's lobes), found inside the box, and the flood
+// then absorbs every other piece; the connectivity is the Freudenthal complex's (14 neighbours) everywhere;
+// the box grows when the interface does not close inside it and shrinks when both lobes are already joined
+// inside it (a short handle wholly inside the box).
+#include "chokeloops/membranes.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "chokeloops/complex.h"
+#include "chokeloops/shorten.h"
+#include "chokeloops/topology.h"
+
+namespace chokeloops {
+
+namespace {
+
+enum class Attempt { Found, Grow, Shrink };
+
+class LoopTracer {
+ public:
+  LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency)
+      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency) {}
+
+  Loop trace(const Choke& c, const LoopOptions& options) const {
+    Loop loop;
+    loop.choke = c;
+    const double h = g_.voxel_size;
+    const int full = std::max({g_.dims[0], g_.dims[1], g_.dims[2]});
+    int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
+    bool grew = false, shrank = false;
+    Polyline3 raw;
+    for (int attempt = 0; attempt < 12; ++attempt) {
+      Attempt a = try_box(c, r, raw);
+      if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
+      if (a == Attempt::Grow) {
+        if (r >= full || shrank) break;
+        r = std::min(full, int(std::ceil(r * 1.8)));
+        grew = true;
+      } else {
+        if (r <= 2 || grew) break;
+        r = std::max(2, r * 2 / 3);
+        shrank = true;
+      }
+    }
+    if (!loop.found) {
+      loop.note = "the membrane did not close on the surface near the choke";
+      return loop;
+    }
+    loop.raw_length = closed_length(raw);
+    loop.points = raw;
+    if (options.shorten) {
+      ShortenOptions so;
+      so.max_move = c.depth + 3 * h;
+      ShortenResult res = shorten_polyline(S_, A_, raw, so);
+      if (res.rings == 0) loop.note = "not shortened: no annulus band around the loop";
+      if (res.points.size() >= 3) loop.points = res.points;
+      loop.edge_path = res.edge_path;
+    } else {
+      loop.edge_path = snap_polyline_to_edge_path(S_, raw);
+    }
+    describe(loop);
+    return loop;
+  }
+
+ private:
+  static void describe(Loop& loop) {
+    const auto& P = loop.points;
+    loop.length = closed_length(P);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (auto& p : P) mean += Eigen::Vector3d(p[0], p[1], p[2]);
+    mean /= double(P.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    double rmin = 1e300, rsum = 0;
+    for (auto& p : P) {
+      Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
+      cov += d * d.transpose();
+      rmin = std::min(rmin, d.norm());
+      rsum += d.norm();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    Eigen::Vector3d n = eig.eigenvectors().col(0);
+    // A sign convention makes the normal reproducible: its largest component is positive.
+    int big = 0;
+    for (int a = 1; a < 3; ++a)
+      if (std::abs(n[a]) > std::abs(n[big])) big = a;
+    if (n[big] < 0) n = -n;
+    loop.centroid = {mean[0], mean[1], mean[2]};
+    loop.normal = {n[0], n[1], n[2]};
+    loop.radius_min = rmin;
+    loop.radius_mean = rsum / double(P.size());
+  }
+
+  int surface_vertex_on(Id edge) const {
+    auto it = std::lower_bound(S_.vertex_edge.begin(), S_.vertex_edge.end(), edge);
+    return (it != S_.vertex_edge.end() && *it == edge) ? int(it - S_.vertex_edge.begin()) : -1;
+  }
+
+  Attempt try_box(const Choke& c, int r, Polyline3& out) const {
+    const bool handle = c.side == Side::Handle;
+    const Id s = c.saddle;
+    // "Below" = earlier in the flood's order: the filtration for handles, its reverse for tunnels.
+    auto below = [&](Id v) { return handle ? vertex_less(f_, v, s) : vertex_less(f_, s, v); };
+    auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
+    auto sc = cx_.coords(s);
+    std::array<int, 3> lo, hi, n;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, sc[a] - r);
+      hi[a] = std::min(g_.dims[a] - 1, sc[a] + r);
+      n[a] = hi[a] - lo[a] + 1;
+    }
+    const Id base = cx_.vertex(lo[0], lo[1], lo[2]);
+    const Id gy = g_.dims[0], gz = Id(g_.dims[0]) * g_.dims[1];
+    const std::size_t ly = std::size_t(n[0]), lz = std::size_t(n[0]) * n[1];
+    struct Node { Id v; std::uint32_t li; std::array<int, 3> p; };  // p: local coordinates
+    auto node_at = [&](const std::array<int, 3>& p) {
+      return Node{base + p[0] + gy * p[1] + gz * p[2], std::uint32_t(p[0] + ly * p[1] + lz * p[2]), p};
+    };
+    std::array<std::array<int, 3>, 14> offsets;
+    for (int k = 0; k < 14; ++k) offsets[k] = freudenthal::neighbor_offset(k);
+    auto for_neighbours = [&](const Node& x, auto&& fn) {
+      for (const auto& o : offsets) {
+        std::array<int, 3> q{x.p[0] + o[0], x.p[1] + o[1], x.p[2] + o[2]};
+        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n[0] || q[1] >= n[1] || q[2] >= n[2]) continue;
+        fn(node_at(q));
+      }
+    };
+    std::vector<std::int8_t> label(lz * n[2], 0);
+
+    // Seeds: the two pieces of {below the saddle} inside the box that hold the lobes.
+    std::vector<Node> seeds;
+    for (int side = 0; side < 2; ++side) {
+      std::vector<Node> stack;
+      Id lobe = c.lobes[side];
+      if (lobe == -2) {  // the lobe is the outside of the grid: every border vertex of the box beyond the saddle
+        for (int k = 0; k < n[2]; ++k)
+          for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+              std::array<int, 3> gpos{lo[0] + i, lo[1] + j, lo[2] + k};
+              bool border = false;
+              for (int a = 0; a < 3; ++a) border |= gpos[a] == 0 || gpos[a] == g_.dims[a] - 1;
+              Node x = node_at({i, j, k});
+              if (border && below(x.v)) stack.push_back(x);
+            }
+      } else if (lobe >= 0 && below(lobe)) {
+        auto gp = cx_.coords(lobe);
+        std::array<int, 3> p{gp[0] - lo[0], gp[1] - lo[1], gp[2] - lo[2]};
+        if (p[0] >= 0 && p[1] >= 0 && p[2] >= 0 && p[0] < n[0] && p[1] < n[1] && p[2] < n[2]) stack.push_back(node_at(p));
+      }
+      if (stack.empty()) return Attempt::Grow;
+      for (const Node& x : stack) {
+        std::int8_t& l = label[x.li];
+        if (l == 2 - side) return Attempt::Shrink;
+        l = std::int8_t(side + 1);
+      }
+      while (!stack.empty()) {
+        Node x = stack.back();
+        stack.pop_back();
+        seeds.push_back(x);
+        bool joined = false;
+        for_neighbours(x, [&](const Node& u) {
+          if (!below(u.v)) return;
+          std::int8_t& l = label[u.li];
+          if (l == 0) { l = std::int8_t(side + 1); stack.push_back(u); }
+          else if (l != side + 1) joined = true;
+        });
+        if (joined) return Attempt::Shrink;
+      }
+    }
+
+    // Priority flood through the solid (the outside, for tunnels) in filtration order, quantised to 1/64
+    // voxel levels (a bucket queue: O(1) per vertex; first in, first out within a level, so the
+    // result is deterministic); remember the labelled vertices next to the surface.
+    const double level = g_.voxel_size / 64;
+    const double fs = f_[s];
+    auto bucket_of = [&](float f) {
+      double d = handle ? (double(f) - fs) : (fs - double(f));  // grows from the saddle toward the surface
+      return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
+    };
+    std::vector<std::vector<Node>> buckets(bucket_of(0.0f) + 2);
+    for (const Node& x : seeds) buckets[0].push_back(x);
+    std::vector<Node> shore;
+    for (std::size_t b = 0; b < buckets.size(); ++b) {
+      for (std::size_t q = 0; q < buckets[b].size(); ++q) {
+        Node x = buckets[b][q];
+        std::int8_t lx = label[x.li];
+        bool at_shore = false;
+        for_neighbours(x, [&](const Node& u) {
+          if (!region(u.v)) { at_shore = true; return; }
+          std::int8_t& l = label[u.li];
+          if (l == 0) {
+            l = lx;
+            buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u);
+          }
+        });
+        if (at_shore) shore.push_back(x);
+      }
+      std::vector<Node>().swap(buckets[b]);
+    }
+
+    // Label the surface vertices on the crossing edges by their region end.
+    std::unordered_map<int, std::int8_t> vertex_label;
+    for (const Node& x : shore) {
+      std::array<int, 3> gp{lo[0] + x.p[0], lo[1] + x.p[1], lo[2] + x.p[2]};
+      for (int nb = 0; nb < 14; ++nb) {
+        if (!cx_.neighbor_inside(gp, nb)) continue;
+        Id u = x.v + cx_.neighbor_delta(nb);
+        if (region(u)) continue;
+        int sv = surface_vertex_on(cx_.edge_id(x.v, u));
+        if (sv >= 0) vertex_label[sv] = label[x.li];
+      }
+    }
+
+    // Interface segments on faces whose vertices carry both labels; chain them into curves.
+    std::unordered_set<int> faces;
+    for (auto& kv : vertex_label)
+      for (int q = A_.vf_start[kv.first]; q < A_.vf_start[kv.first + 1]; ++q) faces.insert(A_.vf[q]);
+    std::vector<int> sorted_faces(faces.begin(), faces.end());
+    std::sort(sorted_faces.begin(), sorted_faces.end());
+    auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
+    std::vector<std::array<std::int64_t, 2>> segments;
+    for (int fi : sorted_faces) {
+      const auto& F = S_.faces[fi];
+      std::array<std::int8_t, 3> l;
+      bool unknown = false;
+      for (int q = 0; q < 3; ++q) {
+        auto it = vertex_label.find(F[q]);
+        l[q] = it == vertex_label.end() ? 0 : it->second;
+        unknown |= l[q] == 0;
+      }
+      if (unknown || (l[0] == l[1] && l[1] == l[2])) continue;
+      std::array<std::int64_t, 2> seg;
+      int m = 0;
+      for (int q = 0; q < 3; ++q)
+        if (l[q] != l[(q + 1) % 3]) seg[m++] = key(F[q], F[(q + 1) % 3]);
+      segments.push_back(seg);
+    }
+    std::unordered_map<std::int64_t, std::array<int, 2>> at;
+    for (int i = 0; i < int(segments.size()); ++i)
+      for (auto e : segments[i]) {
+        auto it = at.find(e);
+        if (it == at.end()) at[e] = {i, -1};
+        else it->second[1] = i;
+      }
+    std::vector<char> used(segments.size(), 0);
+    double best = 1e300;
+    const double h = g_.voxel_size;
+    auto midpoint = [&](std::int64_t e) {
+      const auto& a = S_.vertices[int(e >> 32)];
+      const auto& b = S_.vertices[int(e & 0xffffffff)];
+      return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+    };
+    for (int start = 0; start < int(segments.size()); ++start) {
+      if (used[start]) continue;
+      Polyline3 curve;
+      std::int64_t first = segments[start][0], e = segments[start][1];
+      int seg = start;
+      bool closed = false;
+      curve.push_back(midpoint(first));
+      used[seg] = 1;
+      for (;;) {
+        curve.push_back(midpoint(e));
+        auto& pair = at[e];
+        int next = pair[0] == seg ? pair[1] : pair[0];
+        if (next < 0 || used[next]) break;
+        used[next] = 1;
+        seg = next;
+        e = segments[seg][0] == e ? segments[seg][1] : segments[seg][0];
+        if (e == first) { closed = true; break; }
+      }
+      if (!closed || curve.size() < 3) continue;
+      double d = 1e300;
+      for (auto& p : curve)
+        d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
+      if (d < best) { best = d; out = curve; }
+    }
+    return best <= c.depth + 4 * h ? Attempt::Found : Attempt::Grow;
+  }
+
+  const ScalarGrid& g_;
+  const float* f_;
+  FreudenthalComplex cx_;
+  const SurfaceMesh& S_;
+  const MeshAdjacency& A_;
+};
+
+}  // namespace
+
+std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                              const std::vector<Choke>& chokes, const LoopOptions& options) {
+  LoopTracer tracer(grid, surface, adjacency);
+  std::vector<Loop> loops(chokes.size());
+  tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) { loops[i] = tracer.trace(chokes[i], options); },
+                    tbb::simple_partitioner());
+  return loops;
+}
+
+}  // namespace chokeloops

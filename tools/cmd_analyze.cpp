@@ -1,0 +1,154 @@
+// `chokeloops analyze INPUT -o OUTDIR`: every stage, the report files, the viewer page and a summary.
+#include <tbb/global_control.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "chokeloops/analyze.h"
+#include "chokeloops/view.h"
+#include "command.h"
+
+using namespace chokeloops;
+
+namespace {
+
+const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
+
+INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
+  -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
+  --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
+                            a closed input mesh's genus
+  --voxel-size H            voxel size in input units (instead of --resolution)
+  --margin M                padding around the object, input units (default: 10% of its longest side)
+  --dmax X                  how deep/far to look for additional loops: percentage of R_in (handles) /
+                            R_out (tunnels), e.g. 50%, or a length in input units (default 50%)
+  --min-persistence Y       minimum persistence of additional loops, same units (default 10%)
+  --side handle|tunnel|both which loops to report (default both)
+  --threads N               worker threads (default: all cores); results do not depend on it
+  --max-memory BYTES        refuse grids needing more (e.g. 8G; default 80% of RAM)
+  --png FILE                also render a picture of the surface and its loops (needs chromium)
+  --no-view                 do not write view.html
+  --no-shorten              keep the raw membrane loops (no geodesic shortening)
+  --quiet                   no progress on stderr
+Exit codes: 0 success, 2 bad input, 3 out of resources.
+)";
+
+// Stage names and a bar on stderr, shown once the run has taken more than a second.
+class Progress {
+ public:
+  explicit Progress(bool quiet) : quiet_(quiet), start_(std::chrono::steady_clock::now()), tty_(isatty(2)) {}
+  bool operator()(const char* stage, double fraction) {
+    if (quiet_) return true;
+    double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (t < 1.0) return true;
+    std::string name = stage;
+    int pct = int(fraction * 100);
+    if (tty_) {
+      int filled = pct / 5;
+      std::fprintf(stderr, "\r%-12s [%s%s] %3d%%  %6.1fs", stage, std::string(filled, '#').c_str(),
+                   std::string(20 - filled, '.').c_str(), pct, t);
+      if (name == "done") std::fprintf(stderr, "\n");
+    } else if (name != last_) {
+      std::fprintf(stderr, "[%6.1fs] %s\n", t, stage);
+    }
+    last_ = name;
+    return true;
+  }
+
+ private:
+  bool quiet_;
+  std::chrono::steady_clock::time_point start_;
+  bool tty_;
+  std::string last_;
+};
+
+int run(std::vector<std::string> args) {
+  AnalyzeOptions options;
+  std::string input, outdir, png;
+  bool quiet = false, view = true;
+  int threads = 0;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= args.size()) throw Error("option " + a + " needs a value (see chokeloops analyze --help)");
+      return args[++i];
+    };
+    auto number = [&](const std::string& v) {
+      char* end = nullptr;
+      double d = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end) throw Error("option " + a + ": '" + v + "' is not a number");
+      return d;
+    };
+    if (a == "-h" || a == "--help") { std::cout << kUsage; return 0; }
+    else if (a == "-o" || a == "--output") outdir = value();
+    else if (a == "--resolution") {
+      std::string v = value();
+      if (v == "auto") options.resolution_auto = true;
+      else {
+        double n = number(v);
+        if (n < 8 || n > 4096 || n != std::floor(n)) throw Error("--resolution must be an integer in [8, 4096] or auto");
+        options.levelset.resolution = int(n);
+      }
+    } else if (a == "--voxel-size") {
+      options.levelset.voxel_size = number(value());
+      if (!(options.levelset.voxel_size > 0)) throw Error("--voxel-size must be positive");
+    } else if (a == "--margin") options.levelset.margin = number(value());
+    else if (a == "--dmax") options.chokes.d_max = Threshold::parse(value());
+    else if (a == "--min-persistence") options.chokes.min_persistence = Threshold::parse(value());
+    else if (a == "--side") {
+      std::string v = value();
+      if (v != "handle" && v != "tunnel" && v != "both") throw Error("--side must be handle, tunnel or both");
+      options.chokes.handles = v != "tunnel";
+      options.chokes.tunnels = v != "handle";
+    } else if (a == "--threads") {
+      double n = number(value());
+      if (n < 1 || n != std::floor(n)) throw Error("--threads must be a positive integer");
+      threads = int(n);
+    } else if (a == "--max-memory") options.levelset.max_memory = parse_bytes(value());
+    else if (a == "--png") png = value();
+    else if (a == "--no-view") view = false;
+    else if (a == "--no-shorten") options.loops.shorten = false;
+    else if (a == "--quiet" || a == "-q") quiet = true;
+    else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops analyze --help)");
+    else if (input.empty()) input = a;
+    else throw Error("more than one input given ('" + input + "' and '" + a + "')");
+  }
+  if (input.empty()) throw Error("no input given (usage: chokeloops analyze INPUT -o OUTDIR)");
+  if (outdir.empty()) throw Error("no output directory given (-o OUTDIR)");
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+
+  Progress progress(quiet);
+  AnalyzeResult r = analyze(input, options, std::ref(progress));
+  auto t = std::chrono::steady_clock::now();
+  write_report(r, options, outdir);
+  if (view) write_view_html(outdir);
+  if (!png.empty()) render_png(outdir, png);
+  double report_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+
+  for (auto& w : r.warnings) std::cerr << "chokeloops analyze: warning: " << w << "\n";
+  int counts[2][2] = {{0, 0}, {0, 0}};
+  for (auto& l : r.loops) counts[l.choke.side == Side::Tunnel][l.choke.kind == Kind::Choke] += 1;
+  std::printf("%s: grid %dx%dx%d (voxel %.4g), surface %lld vertices, genus %d, %d component(s)\n",
+              input.c_str(), r.grid.dims[0], r.grid.dims[1], r.grid.dims[2], r.grid.voxel_size,
+              (long long)r.surface_stats.vertices, r.surface_stats.genus, r.surface_stats.components);
+  std::printf("handle loops: %d generator(s), %d choke(s)   tunnel loops: %d generator(s), %d choke(s)\n",
+              counts[0][0], counts[0][1], counts[1][0], counts[1][1]);
+  std::printf("d_max %s (handles %.4g, tunnels %.4g), min persistence %s (handles %.4g, tunnels %.4g)\n",
+              options.chokes.d_max.text().c_str(), r.chokes.d_max_handle, r.chokes.d_max_tunnel,
+              options.chokes.min_persistence.text().c_str(), r.chokes.min_persistence_handle,
+              r.chokes.min_persistence_tunnel);
+  std::printf("time: levelset %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, report %.0f ms, total %.0f ms\n",
+              r.timings_ms["levelset"], r.timings_ms["persistence"], r.timings_ms["surface"], r.timings_ms["loops"],
+              report_ms, r.timings_ms["total"] + report_ms);
+  std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json%s}%s%s\n", outdir.c_str(), view ? ",view.html" : "",
+              png.empty() ? "" : " and ", png.c_str());
+  return 0;
+}
+
+chokeloops::cli::Register reg("analyze", "find the handle and tunnel choking loops of a mesh or level set", run);
+
+}  // namespace
