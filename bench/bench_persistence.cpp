@@ -1,0 +1,213 @@
+// Benchmark of lower-star persistence (issue 2):
+//   torus        signed distance of a torus R = 0.3, r = 0.12 centred in the unit cube, x_i = i/(n-1)
+//   torus+noise  the same plus uniform noise in [-0.02, 0.02] (fixed seed)
+//   random       a smooth random field: sum of 30 random Gaussian bumps (fixed seed)
+// at 128^3 and 256^3 (and 512^3 with --large). Each configuration runs in a fresh child process
+// (fork), so the peak RSS printed (getrusage ru_maxrss) is that configuration's: it includes the
+// input field (4 bytes per vertex) and the diagram. Times are medians over --runs runs (default 5)
+// of each phase (PersistenceDiagram::stats) and of the whole lower_star_persistence call.
+//
+// usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random]
+//                          [--threads N]
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "chokeloops/analytic.h"
+#include "chokeloops/persistence.h"
+
+using namespace chokeloops;
+
+namespace {
+
+struct Result {
+  int ok = 0;
+  double classify = 0, dim0 = 0, dim2 = 0, dim1 = 0, total = 0, wall = 0, make_field = 0;
+  long long pairs[3] = {0, 0, 0};
+  long long essential = 0, join_saddles = 0, split_saddles = 0, minima = 0, maxima = 0;
+  double peak_rss_mb = 0;
+  char error[200] = {0};
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+ScalarGrid make_field(const std::string& name, int n) {
+  if (name == "torus" || name == "noise") {
+    ScalarGrid g = sample_field({n, n, n}, analytic::torus(0.3, 0.12));
+    if (name == "noise") add_uniform_noise(g, 0.02, 2026);
+    return g;
+  }
+  if (name == "random") return sample_field({n, n, n}, analytic::random_gaussians(30, 2026));
+  throw std::invalid_argument("unknown field '" + name + "' (torus, noise, random)");
+}
+
+const char* field_label(const std::string& name) {
+  if (name == "torus") return "torus SDF";
+  if (name == "noise") return "torus SDF + noise 0.02";
+  if (name == "random") return "smooth random (30 Gaussians)";
+  return name.c_str();
+}
+
+Result measure(const std::string& field, int n, int runs) {
+  Result r;
+  auto t0 = std::chrono::steady_clock::now();
+  ScalarGrid g = make_field(field, n);
+  r.make_field = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<double> cl, d0, d2, d1, tot, wall;
+  for (int i = 0; i < runs; ++i) {
+    auto s = std::chrono::steady_clock::now();
+    PersistenceDiagram d = lower_star_persistence(g);
+    wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - s).count());
+    cl.push_back(d.stats.seconds_classify);
+    d0.push_back(d.stats.seconds_dim0);
+    d2.push_back(d.stats.seconds_dim2);
+    d1.push_back(d.stats.seconds_dim1);
+    tot.push_back(d.stats.seconds_total);
+    for (int k = 0; k < 3; ++k) r.pairs[k] = (long long)d.count(k);
+    r.essential = (long long)d.essential.size();
+    r.join_saddles = d.stats.join_saddles;
+    r.split_saddles = d.stats.split_saddles;
+    r.minima = d.stats.minima;
+    r.maxima = d.stats.maxima;
+  }
+  r.classify = median(cl);
+  r.dim0 = median(d0);
+  r.dim2 = median(d2);
+  r.dim1 = median(d1);
+  r.total = median(tot);
+  r.wall = median(wall);
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  r.peak_rss_mb = double(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+  r.ok = 1;
+  return r;
+}
+
+// Runs `measure` in a child process and returns its result through a pipe.
+Result measure_in_child(const std::string& field, int n, int runs, int threads) {
+  int fd[2];
+  if (pipe(fd) != 0) {
+    std::perror("pipe");
+    std::exit(1);
+  }
+  std::fflush(stdout);
+  pid_t pid = fork();
+  if (pid < 0) {
+    std::perror("fork");
+    std::exit(1);
+  }
+  if (pid == 0) {
+    close(fd[0]);
+    Result r;
+    try {
+      std::unique_ptr<tbb::global_control> limit;
+      if (threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      r = measure(field, n, runs);
+    } catch (const std::exception& e) {
+      std::snprintf(r.error, sizeof r.error, "%s", e.what());
+    }
+    ssize_t w = write(fd[1], &r, sizeof r);
+    (void)w;
+    close(fd[1]);
+    _exit(0);
+  }
+  close(fd[1]);
+  Result r;
+  size_t got = 0;
+  while (got < sizeof r) {
+    ssize_t k = read(fd[0], reinterpret_cast<char*>(&r) + got, sizeof r - got);
+    if (k <= 0) break;
+    got += size_t(k);
+  }
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (got != sizeof r) {
+    r = Result{};
+    std::snprintf(r.error, sizeof r.error, "child died (%s %d)", WIFSIGNALED(status) ? "signal" : "exit",
+                  WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
+  }
+  return r;
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ',')) out.push_back(item);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 5, threads = 0;
+  bool large = false;
+  std::vector<int> sizes{128, 256};
+  std::vector<std::string> fields{"torus", "noise", "random"};
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--runs") runs = std::max(1, std::atoi(value().c_str()));
+    else if (a == "--large") large = true;
+    else if (a == "--threads") threads = std::atoi(value().c_str());
+    else if (a == "--sizes") {
+      sizes.clear();
+      for (auto& s : split(value())) sizes.push_back(std::atoi(s.c_str()));
+    } else if (a == "--fields") fields = split(value());
+    else {
+      std::fprintf(stderr,
+                   "usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random] "
+                   "[--threads N]\n");
+      return a == "-h" || a == "--help" ? 0 : 2;
+    }
+  }
+  if (large && std::find(sizes.begin(), sizes.end(), 512) == sizes.end()) sizes.push_back(512);
+
+  std::printf("lower_star_persistence: median of %d runs, %d threads (tbb default %d); peak RSS per configuration "
+              "(fresh process, includes the float field)\n\n",
+              runs, threads > 0 ? threads : tbb::info::default_concurrency(), tbb::info::default_concurrency());
+  std::printf("| field | n | classify s | dim0 s | dim2 s | dim1 s | total s | wall s | pairs dim0 | dim1 | dim2 | "
+              "joins | splits | peak RSS MB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::fflush(stdout);
+  int failures = 0;
+  for (int n : sizes)
+    for (auto& f : fields) {
+      Result r = measure_in_child(f, n, runs, threads);
+      if (!r.ok) {
+        std::printf("| %s | %d^3 | failed: %s |\n", field_label(f), n, r.error);
+        ++failures;
+      } else {
+        std::printf("| %s | %d^3 | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %lld | %lld | %lld | %lld | %lld | %.0f |\n",
+                    field_label(f), n, r.classify, r.dim0, r.dim2, r.dim1, r.total, r.wall, r.pairs[0], r.pairs[1],
+                    r.pairs[2], r.join_saddles, r.split_saddles, r.peak_rss_mb);
+      }
+      std::fflush(stdout);
+    }
+  return failures ? 1 : 0;
+}
