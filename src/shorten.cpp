@@ -7,6 +7,7 @@
 #include <numeric>
 #include <queue>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "chokeloops/topology.h"
 
@@ -34,9 +35,9 @@ bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
 
 // Everything about the annulus band around the loop.
 struct Band {
-  std::vector<char> in_face;        // per mesh face
+  std::unordered_set<int> in_face;  // mesh faces of the band
   std::vector<int> faces;
-  std::vector<int> local;           // mesh vertex -> band vertex, -1 outside
+  std::unordered_map<int, int> local;  // mesh vertex -> band vertex
   std::vector<int> global;          // band vertex -> mesh vertex
   std::unordered_map<int, int> sign;  // cut crossing sign per mesh half-edge
   int winding = 0;                  // of the input loop
@@ -52,7 +53,11 @@ struct Shortener {
 
   int vert(int h) const { return mesh.faces[h / 3][h % 3]; }          // source of half-edge h
   int vert_to(int h) const { return mesh.faces[h / 3][(h % 3 + 1) % 3]; }
-  bool face_in(int f) const { return f >= 0 && band.in_face[f]; }
+  bool face_in(int f) const { return f >= 0 && band.in_face.count(f); }
+  int local_of(int v) const {
+    auto it = band.local.find(v);
+    return it == band.local.end() ? -1 : it->second;
+  }
   int hsign(int h) const {
     auto it = band.sign.find(h);
     return it == band.sign.end() ? 0 : it->second;
@@ -67,35 +72,38 @@ struct Shortener {
 
   // ---- Step 1: band ------------------------------------------------------------------------------
   // Builds the band of faces allowed by `allowed_vertex` and checks that it is an annulus; sets the cut.
-  bool build_band(const std::vector<char>& allowed_vertex, const std::vector<char>& near_loop, const std::vector<int>& loop) {
+  // `region`: mesh vertices near the loop; `allowed[i]` and `near_loop[i]` (2: on the loop, 1: one ring
+  // away) refer to region[i]; `rid` maps mesh vertices to region indices.
+  bool build_band(const std::vector<int>& region, const std::unordered_map<int, int>& rid,
+                  const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop) {
     Band B;
-    B.in_face.assign(mesh.faces.size(), 0);
-    B.local.assign(mesh.vertices.size(), -1);
+    auto allowed_vertex = [&](int v) { auto it = rid.find(v); return it != rid.end() && allowed[it->second]; };
+    auto near_loop = [&](int v) { auto it = rid.find(v); return it == rid.end() ? 0 : int(near[it->second]); };
     // Collect faces around allowed vertices.
     std::vector<int> cand;
-    for (size_t v = 0; v < mesh.vertices.size(); ++v)
-      if (allowed_vertex[v])
-        for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i) cand.push_back(adj.vf[i]);
+    for (size_t i = 0; i < region.size(); ++i)
+      if (allowed[i])
+        for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) cand.push_back(adj.vf[j]);
     std::sort(cand.begin(), cand.end());
     cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
     for (int f : cand) {
       auto& t = mesh.faces[f];
       bool ok = true;
-      for (int k = 0; k < 3; ++k) ok = ok && (allowed_vertex[t[k]] || near_loop[t[k]]);
+      for (int k = 0; k < 3; ++k) ok = ok && (allowed_vertex(t[k]) || near_loop(t[k]));
       if (!ok) continue;
       // faces touching the loop are always allowed; others need all vertices allowed
-      if (!(allowed_vertex[t[0]] && allowed_vertex[t[1]] && allowed_vertex[t[2]])) {
-        bool touches = near_loop[t[0]] == 2 || near_loop[t[1]] == 2 || near_loop[t[2]] == 2;
+      if (!(allowed_vertex(t[0]) && allowed_vertex(t[1]) && allowed_vertex(t[2]))) {
+        bool touches = near_loop(t[0]) == 2 || near_loop(t[1]) == 2 || near_loop(t[2]) == 2;
         if (!touches) continue;
       }
-      B.in_face[f] = 1;
+      B.in_face.insert(f);
       B.faces.push_back(f);
     }
     if (B.faces.empty()) return false;
     for (int f : B.faces)
       for (int k = 0; k < 3; ++k) {
         int v = mesh.faces[f][k];
-        if (B.local[v] < 0) B.local[v] = int(B.global.size()), B.global.push_back(v);
+        if (B.local.emplace(v, int(B.global.size())).second) B.global.push_back(v);
       }
     band = std::move(B);
     Band& b = band;
@@ -108,7 +116,7 @@ struct Shortener {
     for (int f : b.faces)
       for (int k = 0; k < 3; ++k) {
         int h = 3 * f + k, t = adj.twin[h];
-        int a = b.local[vert(h)], c = b.local[vert_to(h)];
+        int a = b.local.at(vert(h)), c = b.local.at(vert_to(h));
         ++faces_at[a];
         bool interior = t >= 0 && face_in(t / 3);
         if (interior) {
@@ -156,7 +164,7 @@ struct Shortener {
       for (int k = 0; k < 3; ++k) {
         int h = 3 * f + k, t = adj.twin[h];
         if (t >= 0 && face_in(t / 3)) continue;
-        bool isA = find(b.local[vert(h)]) == rootA;
+        bool isA = find(b.local.at(vert(h))) == rootA;
         if (isA == curveA) return h;
       }
       return -1;
@@ -190,7 +198,7 @@ struct Shortener {
     b.cut_vertices.clear();
     for (; parent_h[f] >= 0; f = parent_h[f] / 3) {
       set_sign(parent_h[f], +1);
-      b.cut_vertices.push_back(b.local[vert(parent_h[f])]);
+      b.cut_vertices.push_back(b.local.at(vert(parent_h[f])));
     }
     set_sign(on_curve(f, true), -1);
     int w = 0;
@@ -208,7 +216,7 @@ struct Shortener {
     for (int f : band.faces)
       for (int k = 0; k < 3; ++k) {
         int h = 3 * f + k;
-        int a = band.local[vert(h)], c = band.local[vert_to(h)];
+        int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
         double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
         int s = hsign(h);
         tmp[a].push_back({c, L, s});
@@ -590,49 +598,70 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   R.input_length = R.edge_path_length = R.length = closed_length(R.points);
   if (loop.size() < 3) return R;
 
-  const size_t nv = mesh.vertices.size();
-  // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded.
+  // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded; all per-vertex
+  // data lives on this region so that the cost follows the band, not the mesh.
   const int max_rings = std::max(1, opt.max_rings);
-  std::vector<int> ring(nv, -1);
-  std::vector<int> order;
+  std::unordered_map<int, int> rid;
+  std::vector<int> region, ring;
   for (int v : loop)
-    if (ring[v] < 0) ring[v] = 0, order.push_back(v);
-  for (size_t i = 0; i < order.size(); ++i) {
-    int v = order[i];
-    if (ring[v] >= max_rings) continue;
+    if (rid.emplace(v, int(region.size())).second) region.push_back(v), ring.push_back(0);
+  for (size_t i = 0; i < region.size(); ++i) {
+    int v = region[i];
+    if (ring[i] >= max_rings) continue;
     for (int j = adj.vv_start[v]; j < adj.vv_start[v + 1]; ++j) {
       int w = adj.vv[j];
-      if (ring[w] < 0) ring[w] = ring[v] + 1, order.push_back(w);
+      if (rid.emplace(w, int(region.size())).second) region.push_back(w), ring.push_back(ring[i] + 1);
     }
   }
   std::vector<double> dist;
   if (opt.max_move > 0) {
-    dist.assign(nv, std::numeric_limits<double>::infinity());
+    dist.assign(region.size(), std::numeric_limits<double>::infinity());
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
-    for (int v : loop) dist[v] = 0, q.push({0, v});
+    for (int v : loop) dist[rid[v]] = 0, q.push({0, rid[v]});
     while (!q.empty()) {
-      auto [d, v] = q.top();
+      auto [d, i] = q.top();
       q.pop();
-      if (d > dist[v] || d > opt.max_move) continue;
+      if (d > dist[i] || d > opt.max_move) continue;
+      int v = region[i];
       for (int j = adj.vv_start[v]; j < adj.vv_start[v + 1]; ++j) {
-        int w = adj.vv[j];
-        double nd = d + dist3(mesh.vertices[v], mesh.vertices[w]);
-        if (nd < dist[w]) dist[w] = nd, q.push({nd, w});
+        auto it = rid.find(adj.vv[j]);
+        if (it == rid.end()) continue;
+        double nd = d + dist3(mesh.vertices[v], mesh.vertices[adj.vv[j]]);
+        if (nd < dist[it->second]) dist[it->second] = nd, q.push({nd, it->second});
       }
     }
   }
-  std::vector<char> near_loop(nv, 0);
-  for (int v : order)
-    if (ring[v] <= 1) near_loop[v] = ring[v] == 0 ? 2 : 1;
+  std::vector<char> near_loop(region.size(), 0);
+  for (size_t i = 0; i < region.size(); ++i)
+    if (ring[i] <= 1) near_loop[i] = ring[i] == 0 ? 2 : 1;
 
   Shortener sh(mesh, adj);
+  auto try_rings = [&](int k) {
+    std::vector<char> allowed(region.size(), 0);
+    for (size_t i = 0; i < region.size(); ++i)
+      if (ring[i] <= k && (dist.empty() || dist[i] <= opt.max_move)) allowed[i] = 1;
+    return sh.build_band(region, rid, allowed, near_loop, loop);
+  };
+  // The widest annulus band: max_rings, else halve until one works, then bisect between that and the
+  // last failure (wider bands stop being annuli when they wrap around or swallow a handle).
   int rings = 0;
-  for (int k = max_rings; k >= 1; --k) {
-    std::vector<char> allowed(nv, 0);
-    for (int v : order)
-      if (ring[v] <= k && (dist.empty() || dist[v] <= opt.max_move)) allowed[v] = 1;
-    if (sh.build_band(allowed, near_loop, loop)) { rings = k; break; }
+  if (try_rings(max_rings)) {
+    rings = max_rings;
+  } else {
+    int bad = max_rings, good = 0;
+    for (int k = max_rings / 2; k >= 1; k /= 2) {
+      if (try_rings(k)) { good = k; break; }
+      bad = k;
+    }
+    if (good) {
+      while (bad - good > 1) {
+        int mid = (good + bad) / 2;
+        if (try_rings(mid)) good = mid; else bad = mid;
+      }
+      if (!try_rings(good)) good = 0;  // leave the band of `good` rings built
+    }
+    rings = good;
   }
   R.rings = rings;
   if (!rings) return R;
@@ -643,7 +672,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   // across the band) find the best place in the band; then loops through the midpoint of the best one.
   std::vector<int> best;
   double best_len = std::numeric_limits<double>::infinity();
-  int s = sh.band.local[loop[0]];
+  int s = sh.local_of(loop[0]);
   {
     std::vector<int> starts{s};
     const auto& cv = sh.band.cut_vertices;
@@ -660,7 +689,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       double acc = 0;
       for (size_t i = 0; i + 1 < best.size(); ++i) {
         acc += dist3(mesh.vertices[best[i]], mesh.vertices[best[i + 1]]);
-        if (acc >= best_len / 2) { s = sh.band.local[best[i + 1]]; break; }
+        if (acc >= best_len / 2) { s = sh.local_of(best[i + 1]); break; }
       }
     }
   }
@@ -675,7 +704,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       acc += dist3(mesh.vertices[best[i]], mesh.vertices[best[i + 1]]);
       if (acc >= best_len / 2) { mid = best[i + 1]; break; }
     }
-    s = sh.band.local[mid];
+    s = sh.local_of(mid);
   }
   if (best.empty()) return R;
   R.edge_path = best;

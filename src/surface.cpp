@@ -220,6 +220,11 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
   return mesh;
 }
 
+int surface_vertex_on_edge(const SurfaceMesh& mesh, Id edge) {
+  auto it = std::lower_bound(mesh.vertex_edge.begin(), mesh.vertex_edge.end(), edge);
+  return it != mesh.vertex_edge.end() && *it == edge ? int(it - mesh.vertex_edge.begin()) : -1;
+}
+
 namespace {
 struct UnionFind {
   std::vector<int> p;

@@ -40,6 +40,7 @@ TEST(Surface, SphereIsGenusZeroWithOutwardNormals) {
   expect_closed_topology(s, 1, 0);
   double vol = 4.0 / 3.0 * M_PI * 0.3 * 0.3 * 0.3, area = 4 * M_PI * 0.09;
   EXPECT_NEAR(s.enclosed_volume, vol, 0.01 * vol);
+  EXPECT_EQ(surface_vertex_on_edge(m, 0), -1);
   EXPECT_NEAR(s.area, area, 0.03 * area);
   ASSERT_EQ(m.vertex_edge.size(), m.vertices.size());
   FreudenthalComplex K(g.dims);
@@ -49,6 +50,7 @@ TEST(Surface, SphereIsGenusZeroWithOutwardNormals) {
     auto ev = K.edge_vertices(e);
     ASSERT_NE(g.values[ev[0]] <= 0, g.values[ev[1]] <= 0);
     if (i) ASSERT_LT(m.vertex_edge[i - 1], e);  // ordered by edge id, one vertex per edge
+    ASSERT_EQ(surface_vertex_on_edge(m, e), int(i));
     auto a = g.world(K.coords(ev[0])), b = g.world(K.coords(ev[1]));
     double da = 0, db = 0;
     for (int d = 0; d < 3; ++d) da += std::pow(m.vertices[i][d] - a[d], 2), db += std::pow(m.vertices[i][d] - b[d], 2);
@@ -154,7 +156,7 @@ TEST(Surface, Extracts256CubedQuickly) {
   double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("256^3 gyroid: %zu vertices, %zu faces in %.3f s\n", m.vertices.size(), m.faces.size(), sec);
   EXPECT_GT(m.faces.size(), 2000000u);
-  EXPECT_LT(sec, 2.0);
+  EXPECT_LT(sec, 3.0);  // 0.48 s on an idle 2-core machine; the bound leaves room for a loaded one
   auto s = surface_stats(m);
   EXPECT_EQ(s.nonmanifold_edges, 0);
   EXPECT_EQ(s.nonmanifold_vertices, 0);

@@ -35,6 +35,10 @@ struct SurfaceMesh {
 
 SurfaceMesh extract_zero_surface(const ScalarGrid& grid);
 
+// The surface vertex lying on grid edge `edge` (binary search in vertex_edge, which is sorted), or -1 when
+// the edge does not cross the zero level.
+int surface_vertex_on_edge(const SurfaceMesh& mesh, Id edge);
+
 struct SurfaceStats {
   std::int64_t vertices = 0, faces = 0, edges = 0;
   std::int64_t boundary_edges = 0;         // edges with one face
