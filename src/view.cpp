@@ -387,7 +387,7 @@ void write_view_html(const std::string& outdir, std::size_t face_budget) {
 
   TriMesh mesh = view_detail::read_ply(ply.string());
   std::size_t source_faces = mesh.faces.size(), source_vertices = mesh.vertices.size();
-  double cell = view_detail::decimate(mesh, face_budget);
+  double cell = face_budget == 0 ? 0.0 : view_detail::decimate(mesh, face_budget);
 
   nlohmann::json data;
   data["report"] = std::move(report);

@@ -13,7 +13,8 @@ namespace chokeloops {
 inline constexpr std::size_t kViewFaceBudget = 300000;
 
 // Reads OUTDIR/surface.ply and OUTDIR/loops.json and writes OUTDIR/view.html.
-// Throws Error (exit code 2) when an input is missing or malformed.
+// Surfaces above face_budget faces are decimated for display (0: never). Throws Error (exit code 2) when an
+// input is missing or malformed.
 void write_view_html(const std::string& outdir, std::size_t face_budget = kViewFaceBudget);
 
 // Renders OUTDIR/view.html (written first if missing or older than its inputs) with headless Chromium into png_path, from the default

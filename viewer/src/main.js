@@ -156,7 +156,7 @@ function main() {
   window.addEventListener('keydown', (e) => { if (e.key === 'Escape') state.select(null); });
   state.categories = Object.keys(COLORS).reduce((o, c) => (o[c] = loops.filter((l) => category(l) === c).length, o), {});
   state.ready = true;
-  if (state.renderMode) { viewer.renderNow(); state.rendered = viewer.ok; }
+  if (state.renderMode) { viewer.resetView(); state.rendered = viewer.ok; }
 }
 
 function buildScene(pos, idx, loops) {
@@ -267,11 +267,10 @@ function buildScene(pos, idx, loops) {
     if (eig[0].value > 0) {
       const tilt = (30 * Math.PI) / 180;
       viewDir = eig[2].vector.clone().multiplyScalar(Math.cos(tilt)).addScaledVector(eig[1].vector, Math.sin(tilt)).normalize();
-      up = eig[1].vector.clone().addScaledVector(viewDir, -eig[1].vector.dot(viewDir)).normalize();
-      // Prefer "up" to point along +z/+y of the input when that is nearly the same choice.
-      const worldUp = Math.abs(new THREE.Vector3(0, 0, 1).dot(up)) >= Math.abs(new THREE.Vector3(0, 1, 0).dot(up)) ? new THREE.Vector3(0, 0, 1) : new THREE.Vector3(0, 1, 0);
-      if (up.dot(worldUp) < 0) up.negate();
       if (viewDir.dot(new THREE.Vector3(1, 1, 1)) < 0) viewDir.negate();
+      // "Up" is the input's +y (the usual convention of mesh files), or +z when the view is along y.
+      const worldUp = Math.abs(viewDir.y) < 0.9 ? new THREE.Vector3(0, 1, 0) : new THREE.Vector3(0, 0, 1);
+      up = worldUp.addScaledVector(viewDir, -worldUp.dot(viewDir)).normalize();
     }
   }
   camera.up.copy(up);
@@ -308,16 +307,36 @@ function buildScene(pos, idx, loops) {
       x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
     }
     const center = sphere.center.clone().addScaledVector(right, (x0 + x1) / 2).addScaledVector(upv, (y0 + y1) / 2);
-    const tv = Math.tan((camera.fov * Math.PI) / 360) * 0.92, th = tv * camera.aspect;
-    let dist = 0;
-    for (const p of fitPoints) {
-      const d = p.clone().sub(center);
-      const z = d.dot(viewDir);
-      dist = Math.max(dist, Math.abs(d.dot(right)) / th + z, Math.abs(d.dot(upv)) / tv + z);
+    const vh = Math.max(1, viewport.clientHeight || window.innerHeight), vw = Math.max(1, viewport.clientWidth || window.innerWidth);
+    const place = (band) => {
+      // band > 0: fit below a band of that many pixels at the top, shifting the image down by half of it.
+      if (band > 0) camera.setViewOffset(vw, vh, 0, -band / 2, vw, vh);
+      else camera.clearViewOffset();
+      const t = Math.tan((camera.fov * Math.PI) / 360) * 0.94;
+      const tv = t * ((vh - band) / vh), th = t * camera.aspect;
+      let dist = 0;
+      for (const p of fitPoints) {
+        const d = p.clone().sub(center);
+        const z = d.dot(viewDir);
+        dist = Math.max(dist, Math.abs(d.dot(right)) / th + z, Math.abs(d.dot(upv)) / tv + z);
+      }
+      dist = Math.max(dist, sphere.radius * 0.05);
+      camera.position.copy(center).addScaledVector(viewDir, dist);
+      camera.lookAt(center);
+      camera.updateMatrixWorld();
+    };
+    place(0);
+    // In a picture, the legend sits in the top-left corner: if the shape would run under it, fit below it.
+    const legend = state.renderMode && document.querySelector('[data-testid=legend]');
+    if (legend) {
+      const r = legend.getBoundingClientRect(), v = viewport.getBoundingClientRect();
+      const lx = r.right - v.left + 6, ly = r.bottom - v.top + 6;
+      const under = fitPoints.some((p) => {
+        const q = p.clone().project(camera);
+        return ((q.x + 1) / 2) * vw < lx && ((1 - q.y) / 2) * vh < ly;
+      });
+      if (under) place(Math.min(vh * 0.3, ly));
     }
-    dist = Math.max(dist, sphere.radius * 0.05);
-    camera.position.copy(center).addScaledVector(viewDir, dist);
-    camera.lookAt(center);
     if (controls) { controls.target.copy(center); controls.update(); }
     render();
   }
