@@ -405,7 +405,7 @@ function buildScene(pos, idx, loops) {
       const o = loop && loopObjs.get(loop.id);
       if (o && frame && controls) {
         o.group.visible = true;
-        flyTo(o.sphere.center, Math.max(fitDistance(o.sphere.radius) * 3, diag * 0.35));
+        flyTo(o.sphere.center, Math.max(fitDistance(o.sphere.radius) * 4, diag * 0.6));
       } else render();
     },
     setOpacity(v) {
@@ -431,13 +431,14 @@ function buildLegend(viewport, loops, viewer, report) {
     legend.append($('div', { class: 'caption', text: `${report.input ?? 'chokeloops'}${g !== undefined ? ` · genus ${g}` : ''} · ${loops.length} loop${loops.length === 1 ? '' : 's'}` }));
   }
   for (const [cat, color] of Object.entries(COLORS)) {
-    const n = loops.filter((l) => category(l) === cat).length;
+    const mine = loops.filter((l) => category(l) === cat);
+    const n = mine.length, drawn = mine.filter((l) => l.points.length >= 2).length;
     const box = $('input', { type: 'checkbox', 'data-testid': `legend-toggle-${cat.replace(' ', '-')}` });
     box.checked = true;
     box.addEventListener('change', () => viewer.setCategoryVisible(cat, box.checked));
     legend.append($('label', { 'data-category': cat }, box,
       $('span', { class: `swatch ${cat.split(' ')[1]}`, style: `background:${color}` }),
-      $('span', { text: `${cat} (${n})` })));
+      $('span', { text: `${cat} (${drawn === n ? n : `${drawn} of ${n} drawn`})` })));
   }
   legend.append($('div', { class: 'muted', style: 'margin-top:3px', text: '● choke point' }));
   viewport.append(legend);
@@ -448,7 +449,9 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   const params = report.parameters || {};
   panel.append($('h1', { text: `chokeloops: ${report.input ?? 'analysis'}` }));
   const count = $('span', { 'data-testid': 'loop-count', 'data-count': String(loops.length), text: String(loops.length) });
-  panel.append($('div', {}, count, ` loop${loops.length === 1 ? '' : 's'} · genus ${surf.genus ?? '?'} · ${surf.components ?? '?'} component(s)`));
+  const missing = loops.filter((l) => l.points.length < 2).length;
+  panel.append($('div', {}, count, ` loop${loops.length === 1 ? '' : 's'}${missing ? ` (${missing} without a polyline)` : ''} · genus ${surf.genus ?? '?'} · ${surf.components ?? '?'} component(s)`));
+  for (const w of Array.isArray(report.warnings) ? report.warnings : []) panel.append($('div', { class: 'note', 'data-testid': 'warning', text: String(w) }));
   const stats = $('dl', { class: 'stats' });
   const add = (k, v) => { if (v !== undefined && v !== null && v !== '') stats.append($('dt', { text: k }), $('dd', { text: String(v) })); };
   add('voxel size', report.voxel_size !== undefined ? `${fmt(report.voxel_size)} (${report.units ?? 'input'} units)` : undefined);
@@ -501,7 +504,12 @@ function buildPanel(panel, report, mesh, loops, viewer) {
     const tr = $('tr', { 'data-testid': 'loop-row', 'data-loop-id': String(l.id), 'aria-selected': 'false' },
       $('td', { text: String(l.id) }),
       $('td', {}, $('span', { class: `swatch ${l.kind}`, style: `background:${COLORS[cat] || '#888'};margin-right:4px` }), l.side),
-      $('td', { text: l.kind }), $('td', { text: fmt(l.depth) }), $('td', { text: fmt(l.persistence) }), $('td', { text: fmt(l.length) }));
+      $('td', { text: l.kind }), $('td', { text: fmt(l.depth) }), $('td', { text: fmt(l.persistence) }),
+      l.points.length >= 2 ? $('td', { text: fmt(l.length) }) : $('td', { class: 'muted', text: 'no loop' }));
+    if (l.points.length < 2) {
+      tr.classList.add('missing');
+      tr.title = typeof l.note === 'string' && l.note ? l.note : 'no loop was found for this choke';
+    }
     tr.tabIndex = 0;
     tr.addEventListener('click', () => state.select(l.id));
     tr.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); state.select(l.id); } });

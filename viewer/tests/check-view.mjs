@@ -111,7 +111,14 @@ try {
     if (shotFile) await page.locator('[data-testid=viewport]').screenshot({ path: shotFile.replace(/\.png$/, '-selected.png') });
 
     // Clicking a point in the diagram selects its loop (a generator: drawn on top).
-    const other = loops.find((l) => l.id !== rowId && l.kind === 'generator');
+    // Points can overlap: use one that is on top at its centre.
+    const onTop = await page.locator('[data-testid=diagram-point]').evaluateAll((ps) => ps.filter((p) => {
+      const r = p.getBoundingClientRect();
+      p.scrollIntoView({ block: 'center' });
+      const r2 = p.getBoundingClientRect();
+      return document.elementFromPoint(r2.left + r2.width / 2, r2.top + r2.height / 2) === p && r.width > 0;
+    }).map((p) => Number(p.dataset.loopId)));
+    const other = loops.find((l) => l.id !== rowId && onTop.includes(l.id));
     if (other) {
       await page.locator(`[data-testid=diagram-point][data-loop-id="${other.id}"]`).click();
       const sel2 = await page.evaluate(() => window.chokeloopsView.selectedLoop);
