@@ -153,6 +153,7 @@ function main() {
   };
   state.setOpacity = (v) => viewer.setOpacity(v);
   state.screenPosition = (id, k = 0) => viewer.screenPosition(id, k);
+  state.timeFrames = (n = 10) => (viewer.timeFrames ? viewer.timeFrames(n) : null);
   window.addEventListener('keydown', (e) => { if (e.key === 'Escape') state.select(null); });
   state.categories = Object.keys(COLORS).reduce((o, c) => (o[c] = loops.filter((l) => category(l) === c).length, o), {});
   state.ready = true;
@@ -394,6 +395,18 @@ function buildScene(pos, idx, loops) {
       return { x: r.left + ((v.x + 1) / 2) * r.width, y: r.top + ((1 - v.y) / 2) * r.height };
     },
     renderNow() { resize(); renderer.render(scene, camera); },
+    // Milliseconds per frame over n synchronous renders, the camera orbiting (for tests).
+    timeFrames(n) {
+      const gl = renderer.getContext(), px = new Uint8Array(4);
+      const t0 = performance.now();
+      for (let i = 0; i < n; i++) {
+        camera.position.applyAxisAngle(camera.up, 0.05);
+        camera.lookAt(controls ? controls.target : sphere.center);
+        renderer.render(scene, camera);
+        gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);  // wait for the frame
+      }
+      return (performance.now() - t0) / n;
+    },
     resetView,
     highlight(loop, frame) {
       for (const o of loopObjs.values()) {

@@ -162,6 +162,11 @@ try {
     check(note === 0 && !st.decimated, 'a small surface was decimated');
   }
 
+  // Frame time while orbiting (software WebGL here: a GPU is much faster).
+  result.frameMs = Math.round(await page.evaluate(() => window.chokeloopsView.timeFrames(10)));
+  await page.click('[data-testid=reset-view]');
+  await page.waitForTimeout(200);
+
   // The 3D view is not blank.
   const shot = await page.locator('[data-testid=viewport]').screenshot(shotFile ? { path: shotFile } : {});
   result.viewport = pixelStats(shot);
