@@ -157,6 +157,9 @@ function main() {
   window.addEventListener('keydown', (e) => { if (e.key === 'Escape') state.select(null); });
   state.categories = Object.keys(COLORS).reduce((o, c) => (o[c] = loops.filter((l) => category(l) === c).length, o), {});
   state.ready = true;
+  // view.html#loop=ID opens with that loop selected.
+  const m = /(?:^#|[#&])loop=(-?\d+)/.exec(location.hash);
+  if (m && byId.has(Number(m[1]))) state.select(Number(m[1]), { frame: !state.renderMode });
   if (state.renderMode) { viewer.resetView(); state.rendered = viewer.ok; }
 }
 
@@ -487,7 +490,12 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   slider.addEventListener('input', () => viewer.setOpacity(slider.value));
   panel.append($('div', { class: 'controls' },
     $('label', {}, 'surface opacity ', slider),
-    $('button', { type: 'button', 'data-testid': 'reset-view', onclick: () => { state.select(null); viewer.resetView(); } }, 'reset view')));
+    $('button', { type: 'button', 'data-testid': 'reset-view', onclick: () => { state.select(null); viewer.resetView(); } }, 'reset view'),
+    $('button', { type: 'button', 'data-testid': 'save-png', title: 'save the 3D view as a PNG', onclick: () => {
+      viewer.renderNow();
+      const a = $('a', { href: document.getElementById('canvas').toDataURL('image/png'), download: `${String(report.input ?? 'chokeloops').replace(/[^\w.-]+/g, '_')}-loops.png` });
+      document.body.append(a); a.click(); a.remove();
+    } }, 'save PNG')));
   panel.append($('div', { class: 'muted', style: 'margin-top:4px', text: 'Drag to rotate, scroll to zoom, right-drag to pan; click a loop, a row or a diagram point to select it.' }));
 
   // Table of loops.

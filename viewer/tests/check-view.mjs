@@ -181,6 +181,16 @@ try {
   result.renderMode = rst;
   check(rst.rendered && rst.panel === 'none', `render mode: ${JSON.stringify(rst)}`);
 
+  // view.html#loop=ID opens with that loop selected.
+  if (loops.length) {
+    const id = loops[loops.length - 1].id;
+    const lpage = await context.newPage();
+    lpage.on('pageerror', (e) => errors.push(`#loop pageerror: ${e.message}`));
+    await lpage.goto(`${url}#loop=${id}`, { waitUntil: 'load', timeout: 120000 });
+    const lsel = await lpage.evaluate(() => window.chokeloopsView.selectedLoop);
+    check(lsel === id, `#loop=${id} selected ${lsel}`);
+  }
+
   result.errors = errors;
   result.externalRequests = requests;
   check(errors.length === 0, `console errors: ${errors.join(' | ')}`);
