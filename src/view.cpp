@@ -271,7 +271,10 @@ TriMesh read_ply(const std::string& path) {
           poly.clear();
           for (std::size_t c = 0; c < std::size_t(cnt); ++c) {
             double x = body.read(p.type);
-            if (int(k) == ifaces) poly.push_back(static_cast<std::uint32_t>(x));
+            if (int(k) == ifaces) {
+              if (!(x >= 0 && x < 4294967295.0)) throw Error(path + ": PLY face " + std::to_string(r) + " has a bad vertex index");
+              poly.push_back(static_cast<std::uint32_t>(x));
+            }
           }
           if (int(k) == ifaces) {
             for (std::size_t c = 1; c + 1 < poly.size(); ++c) mesh.faces.push_back({poly[0], poly[c], poly[c + 1]});
