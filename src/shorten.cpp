@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 #include <queue>
@@ -373,28 +375,32 @@ struct Shortener {
     std::vector<P2> pts{start};
     std::vector<int> pidx{0};
     std::vector<int> pside{-1};
+    // Each funnel point carries its portal index and side (0 left endpoint, 1 right, -1 start point); a
+    // reset funnel side inherits the apex's, so a re-added apex keeps its true position.
     P2 apex = start, left = pl[0], right = pr[0];
     int apexIndex = 0, leftIndex = 0, rightIndex = 0;
+    int apexSide = -1, leftSide = -1, rightSide = -1;
     for (int i = 1; i <= m; ++i) {
       P2 l = pl[i], r = pr[i];
+      int lside = i == m ? -1 : 0, rside = i == m ? -1 : 1;
       if (triarea2(apex, right, r) <= 0.0) {
         if (same(apex, right) || triarea2(apex, left, r) > 0.0) {
-          right = r, rightIndex = i;
+          right = r, rightIndex = i, rightSide = rside;
         } else {
-          pts.push_back(left), pidx.push_back(leftIndex), pside.push_back(0);
-          apex = left, apexIndex = leftIndex;
-          left = right = apex, leftIndex = rightIndex = apexIndex;
+          pts.push_back(left), pidx.push_back(leftIndex), pside.push_back(leftSide);
+          apex = left, apexIndex = leftIndex, apexSide = leftSide;
+          left = right = apex, leftIndex = rightIndex = apexIndex, leftSide = rightSide = apexSide;
           i = apexIndex;
           continue;
         }
       }
       if (triarea2(apex, left, l) >= 0.0) {
         if (same(apex, left) || triarea2(apex, right, l) < 0.0) {
-          left = l, leftIndex = i;
+          left = l, leftIndex = i, leftSide = lside;
         } else {
-          pts.push_back(right), pidx.push_back(rightIndex), pside.push_back(1);
-          apex = right, apexIndex = rightIndex;
-          left = right = apex, leftIndex = rightIndex = apexIndex;
+          pts.push_back(right), pidx.push_back(rightIndex), pside.push_back(rightSide);
+          apex = right, apexIndex = rightIndex, apexSide = rightSide;
+          left = right = apex, leftIndex = rightIndex = apexIndex, leftSide = rightSide = apexSide;
           i = apexIndex;
           continue;
         }
@@ -423,7 +429,64 @@ struct Shortener {
       }
     }
     s = ns;
-    return length;
+    // The funnel assumes a sleeve that unfolds without overlapping itself; where the strip overlaps (tiny
+    // faces near clamped vertices, fans of more than 2*pi) its length can be optimistic, so report the
+    // length of the polyline actually built from the crossings.
+    (void)length;
+    return params_length(S, s);
+  }
+
+  P3 crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const {
+    const int m = int(S.size());
+    int h = portal_of(S[j], S[(j + 1) % m]);
+    return lerp3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)], s[j]);
+  }
+  double params_length(const std::vector<int>& S, const std::vector<double>& s) const {
+    const int m = int(S.size());
+    double L = 0;
+    P3 first = crossing(S, s, 0), prev = first;
+    for (int j = 1; j < m; ++j) {
+      P3 q = crossing(S, s, j);
+      L += dist3(prev, q);
+      prev = q;
+    }
+    return L + dist3(prev, first);
+  }
+  // Gauss-Seidel on the crossing parameters: each crossing moves to the point of its portal that is
+  // closest to its neighbours (unfolding the two faces around the portal). The length is a convex
+  // function of the parameters, so this only polishes what the funnel left.
+  double polish(const std::vector<int>& S, std::vector<double>& s, int sweeps) const {
+    const int m = int(S.size());
+    std::vector<int> ph(m);
+    for (int j = 0; j < m; ++j) ph[j] = portal_of(S[j], S[(j + 1) % m]);
+    auto point = [&](int j) { return lerp3(mesh.vertices[vert(ph[j])], mesh.vertices[vert_to(ph[j])], s[j]); };
+    double L = params_length(S, s);
+    for (int it = 0; it < sweeps; ++it) {
+      for (int j = 0; j < m; ++j) {
+        P3 P = point((j + m - 1) % m), Q = point((j + 1) % m);
+        const P3& A = mesh.vertices[vert(ph[j])];
+        const P3& B = mesh.vertices[vert_to(ph[j])];
+        double len = dist3(A, B);
+        if (len <= 0) continue;
+        P3 d{(B[0] - A[0]) / len, (B[1] - A[1]) / len, (B[2] - A[2]) / len};
+        auto split = [&](const P3& X, double& along, double& off) {
+          P3 v{X[0] - A[0], X[1] - A[1], X[2] - A[2]};
+          along = v[0] * d[0] + v[1] * d[1] + v[2] * d[2];
+          P3 o{v[0] - along * d[0], v[1] - along * d[1], v[2] - along * d[2]};
+          off = std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+        };
+        double ap, hp, aq, hq;
+        split(P, ap, hp);
+        split(Q, aq, hq);
+        double tau = hp + hq > 0 ? ap + (aq - ap) * hp / (hp + hq) : 0.5 * (ap + aq);
+        s[j] = std::min(1.0, std::max(0.0, tau / len));
+      }
+      double Ln = params_length(S, s);
+      bool done = Ln > L - 1e-12 * L;
+      L = std::min(L, Ln);
+      if (done) break;
+    }
+    return L;
   }
   Polyline3 strip_points(const std::vector<int>& S, const std::vector<double>& s) const {
     Polyline3 out;
@@ -681,6 +744,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     std::sort(starts.begin() + 1, starts.end());
     starts.erase(std::unique(starts.begin() + 1, starts.end()), starts.end());
     for (int st : starts) {
+      if (st < 0) continue;
       double L;
       auto P = sh.shortest_loop_through(st, L);
       if (!P.empty() && L < best_len - 1e-12) best = P, best_len = L, s = st;
@@ -693,7 +757,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       }
     }
   }
-  for (int it = 0; it < 16; ++it) {
+  for (int it = 0; it < 16 && s >= 0; ++it) {
     double L;
     auto P = sh.shortest_loop_through(s, L);
     if (P.empty() || !(L < best_len - 1e-12)) break;
@@ -719,7 +783,8 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   std::vector<Shortener::Apex> apexes;
   int cut = 0;
   double L = sh.relax(S, cut, sp, apexes);
-  for (int it = 0; it < 100 && R.swaps < opt.max_swaps; ++it) {
+  int flat_rounds = 0;
+  for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
     std::vector<int> S2 = S;
     std::vector<double> s2 = sp;
     int c2 = 0;
@@ -732,10 +797,14 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       n = sh.swap_batch(S2, s2, apexes, c2, 1);
       L2 = sh.relax(S2, c2, s2, ap2);
     }
-    if (!(L2 < L - 1e-12 * L)) break;
-    S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = L2;
+    if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
+      std::fprintf(stderr, "swap round %d: %d swaps, %.9f -> %.9f (strip %zu)\n", it, n, L, L2, S2.size());
+    if (!(L2 < L + 1e-9 * L)) break;  // a swap below pi shortens; allow relaxation noise only
+    if (!(L2 < L - 1e-12 * L) && ++flat_rounds > 3) break;
+    S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = std::min(L, L2);
     R.swaps += n;
   }
+  sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
   double Lp = closed_length(pts);
   if (pts.size() >= 3 && Lp <= R.length) {
@@ -753,7 +822,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const std::vector<int>& loop
 
 ShortenResult shorten_polyline(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
                                const ShortenOptions& options) {
-  auto loop = snap_polyline_to_edge_path(mesh, polyline);
+  auto loop = snap_polyline_to_edge_path(mesh, adj, polyline);
   return shorten_loop(mesh, adj, loop, options);
 }
 

@@ -172,6 +172,15 @@ Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop) {
 double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop) { return closed_length(loop_points(mesh, loop)); }
 
 std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component) {
+  return snap_polyline_to_edge_path(mesh, nullptr, polyline, component);
+}
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
+                                            int component) {
+  return snap_polyline_to_edge_path(mesh, &adj, polyline, component);
+}
+
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency* adj, const Polyline3& polyline,
+                                            int component) {
   if (polyline.empty()) throw Error("polyline is empty");
   if (mesh.faces.empty()) throw Error("surface is empty");
   std::vector<int> vlabel;
@@ -184,8 +193,10 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyl
   }
   // Local region: the polyline's bounding box grown by a margin.
   double edge = 0;
-  for (auto& t : mesh.faces) edge += dist(mesh.vertices[t[0]], mesh.vertices[t[1]]);
-  edge /= double(mesh.faces.size());
+  size_t stride = std::max<size_t>(1, mesh.faces.size() / 4096), sampled = 0;
+  for (size_t f = 0; f < mesh.faces.size(); f += stride, ++sampled)
+    edge += dist(mesh.vertices[mesh.faces[f][0]], mesh.vertices[mesh.faces[f][1]]);
+  edge /= double(sampled);
   double seg = 0;
   for (size_t i = 0; i < polyline.size(); ++i) seg = std::max(seg, dist(polyline[i], polyline[(i + 1) % polyline.size()]));
   double margin = 4 * std::max(edge, seg) + 4 * edge;
@@ -206,11 +217,17 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyl
   if (global.empty()) throw Error("no surface vertex near the polyline");
   // Local adjacency.
   std::vector<std::vector<int>> nb(global.size());
-  for (auto& t : mesh.faces)
-    for (int k = 0; k < 3; ++k) {
-      int a = local[t[k]], b = local[t[(k + 1) % 3]];
-      if (a >= 0 && b >= 0) nb[a].push_back(b), nb[b].push_back(a);
-    }
+  if (adj) {
+    for (size_t i = 0; i < global.size(); ++i)
+      for (int j = adj->vv_start[global[i]]; j < adj->vv_start[global[i] + 1]; ++j)
+        if (local[adj->vv[j]] >= 0) nb[i].push_back(local[adj->vv[j]]);
+  } else {
+    for (auto& t : mesh.faces)
+      for (int k = 0; k < 3; ++k) {
+        int a = local[t[k]], b = local[t[(k + 1) % 3]];
+        if (a >= 0 && b >= 0) nb[a].push_back(b), nb[b].push_back(a);
+      }
+  }
   for (auto& n : nb) {
     std::sort(n.begin(), n.end());
     n.erase(std::unique(n.begin(), n.end()), n.end());
@@ -232,7 +249,8 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyl
     auto c = cell_of(p);
     int best = -1;
     double bd = 1e300;
-    for (int r = 0; r < 1000; ++r) {
+    const int rmax = int(margin / cell) + 2;
+    for (int r = 0; r <= rmax; ++r) {
       for (long x = c[0] - r; x <= c[0] + r; ++x)
         for (long y = c[1] - r; y <= c[1] + r; ++y)
           for (long z = c[2] - r; z <= c[2] + r; ++z) {
@@ -253,6 +271,7 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyl
     if (v >= 0 && (snapped.empty() || snapped.back() != v)) snapped.push_back(v);
   }
   while (snapped.size() > 1 && snapped.back() == snapped.front()) snapped.pop_back();
+  if (snapped.empty()) throw Error("no surface vertex near the polyline");
   if (snapped.size() < 2) return {global[snapped[0]]};
   // Join consecutive vertices by shortest edge paths.
   std::vector<double> d(global.size(), std::numeric_limits<double>::infinity());

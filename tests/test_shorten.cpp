@@ -133,6 +133,44 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
   EXPECT_LT(near.length, near.input_length);
   EXPECT_GT(near.length, far.length);
   EXPECT_LT(std::fabs(ang2 - t0) * 0.5, leash + 2 * g.voxel_size);
+  auto start_pts = loop_points(m, start);
+  double worst = 0;
+  for (auto& q : near.points) {
+    double best = 1e300;
+    for (auto& p : start_pts) best = std::min(best, std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]));
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, leash + g.voxel_size);  // no point moved farther than the leash (plus one edge)
+}
+
+TEST(Shorten, DoubleTorusHandleMeridianStaysEssential) {
+  auto m = extract_zero_surface(sample_field({128, 128, 128}, analytic::double_torus()));
+  auto adj = build_adjacency(m);
+  // Left torus (centre x = 0.33, R = 0.17, r = 0.07): a tilted, wiggly loop around its far-side tube.
+  auto wig = wiggly_meridian({0.33, 0.5, 0.5}, 0.17, 0.07, M_PI, 0.2, 3);
+  auto res = shorten_polyline(m, adj, wig, ShortenOptions{0, 10, 5000});
+  std::printf("double torus: input %.4f final %.4f target %.4f rings %d swaps %d\n", res.input_length, res.length,
+              2 * M_PI * 0.07, res.rings, res.swaps);
+  EXPECT_NEAR(res.length, 2 * M_PI * 0.07, 0.03 * 2 * M_PI * 0.07);
+  SurfaceTopology topo(m);
+  EXPECT_FALSE(topo.contractible(res.edge_path));
+  EXPECT_FALSE(topo.contractible(snap_polyline_to_edge_path(m, adj, res.points)));
+  EXPECT_FALSE(topo.separates(res.edge_path));
+}
+
+TEST(Shorten, CostFollowsTheLoopNotTheMesh) {
+  // 256^3 torus (about a million faces): shortening one meridian takes a small fraction of a second.
+  const double R = 0.3, r = 0.12;
+  auto m = extract_zero_surface(sample_field({256, 256, 256}, analytic::torus(R, r)));
+  auto adj = build_adjacency(m);
+  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, R, r, 1.0, 0.05, 4));
+  auto t0 = std::chrono::steady_clock::now();
+  auto res = shorten_loop(m, adj, loop, ShortenOptions{0, 8, 5000});
+  double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("256^3 meridian (%zu faces): %.4f -> %.4f (target %.4f) in %.3f s, swaps %d\n", m.faces.size(),
+              res.input_length, res.length, 2 * M_PI * r, sec, res.swaps);
+  EXPECT_NEAR(res.length, 2 * M_PI * r, 0.01 * 2 * M_PI * r);
+  EXPECT_LT(sec, 1.5);
 }
 
 TEST(Shorten, DumbbellNeckLoopIsKeptAroundTheNeck) {

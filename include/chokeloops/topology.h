@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "chokeloops/mesh_adjacency.h"
 #include "chokeloops/surface.h"
 
 namespace chokeloops {
@@ -43,7 +44,13 @@ bool loop_is_simple(const std::vector<int>& loop);
 // vertex of every point, joined by shortest edge paths (Dijkstra over the part of the mesh near the
 // polyline), with repeated vertices and back-and-forth spurs removed. When `component` >= 0, only vertices
 // of that component are used. The result is a cyclic vertex list (first vertex not repeated).
+// Points with no vertex within a few edge lengths are skipped. Throws Error when nothing is left or the
+// snapped vertices are not connected. The overload with a prebuilt adjacency avoids scanning the faces.
 std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component = -1);
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
+                                            int component = -1);
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency* adj, const Polyline3& polyline,
+                                            int component);
 
 // Length of a closed polyline (including the closing segment) and of a closed vertex loop.
 double closed_length(const Polyline3& polyline);
