@@ -316,7 +316,9 @@ double decimate(TriMesh& mesh, std::size_t max_faces) {
   }
   double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-30});
   // A surface of area A clustered with cells of size h keeps roughly 2A/h^2 to 4A/h^2 faces.
+  if (!std::isfinite(extent) || !std::isfinite(area)) throw Error("the surface is too large to display (coordinates overflow)");
   double h = std::max(std::sqrt(3.0 * area / double(max_faces)), extent / 2000000.0);
+  if (!(h > 0)) h = extent > 0 ? extent / 1000.0 : 1.0;
   for (int attempt = 0; attempt < 60; ++attempt, h *= 1.15) {
     std::unordered_map<std::uint64_t, std::uint32_t> cell_of;
     cell_of.reserve(mesh.vertices.size() / 2);
@@ -325,7 +327,7 @@ double decimate(TriMesh& mesh, std::size_t max_faces) {
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       const auto& v = mesh.vertices[i];
       std::uint64_t key = 0;
-      for (int a = 0; a < 3; ++a) key = (key << 21) | (std::uint64_t((v[a] - lo[a]) / h) & 0x1FFFFF);
+      for (int a = 0; a < 3; ++a) key = (key << 21) | std::uint64_t(std::clamp((v[a] - lo[a]) / h, 0.0, double(0x1FFFFF)));
       auto [it, fresh] = cell_of.emplace(key, std::uint32_t(sums.size()));
       if (fresh) sums.push_back({0, 0, 0, 0});
       auto& s = sums[it->second];
