@@ -778,7 +778,10 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
 
   // Step 3.
   std::vector<int> S;
-  if (!sh.strip_from_edge_loop(best, S)) return R;
+  if (!sh.strip_from_edge_loop(best, S)) {
+    if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN")) std::fprintf(stderr, "no triangle strip around the edge loop\n");
+    return R;
+  }
   std::vector<double> sp(S.size(), 0.5);
   std::vector<Shortener::Apex> apexes;
   int cut = 0;
@@ -807,6 +810,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
   double Lp = closed_length(pts);
+  if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
+    std::fprintf(stderr, "edge loop %.9f (%zu vertices), strip %zu faces, relaxed %.9f, polished %.9f\n", R.length,
+                 best.size(), S.size(), L, Lp);
   if (pts.size() >= 3 && Lp <= R.length) {
     R.points = pts;
     R.length = Lp;

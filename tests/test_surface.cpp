@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "analytic_fields.h"
@@ -188,4 +189,22 @@ TEST(MeshWrite, PlyAndObjFiles) {
   std::string ply((std::istreambuf_iterator<char>(lp)), {});
   EXPECT_NE(ply.find("element edge 7"), std::string::npos);
   EXPECT_THROW(write_ply(m, "/nonexistent-dir/x.ply"), Error);
+}
+
+TEST(Surface, EmptyWhenNothingCrosses) {
+  auto g = cube_field(8, [](double, double, double) { return 1.0; });
+  auto m = extract_zero_surface(g);
+  EXPECT_TRUE(m.vertices.empty());
+  EXPECT_TRUE(m.faces.empty());
+  auto s = surface_stats(m);
+  EXPECT_EQ(s.components, 0);
+  EXPECT_EQ(s.genus, 0);
+  g.values[3] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(extract_zero_surface(g), Error);
+  // A solid touching the box border gives an open surface: boundary edges are reported, no genus.
+  auto open = extract_zero_surface(cube_field(16, [](double, double, double z) { return z - 0.5; }));
+  auto so = surface_stats(open);
+  EXPECT_GT(so.boundary_edges, 0);
+  EXPECT_FALSE(so.closed_manifold);
+  EXPECT_EQ(so.component_genus, std::vector<int>{-1});
 }

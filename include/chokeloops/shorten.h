@@ -17,7 +17,14 @@
 //     the loop by alternating the cut portal; then wherever the loop bends around a vertex whose angle on
 //     the other side is below pi, the strip is moved to that side and the funnel rerun (iterative shortest
 //     path in a triangle strip). Every step is a homotopy inside the band, so the class is kept.
+//     The funnel's lengths are checked against the polyline actually built from its portal crossings (the
+//     unfolded strip can overlap itself near tiny faces), and a final Gauss-Seidel pass moves each crossing
+//     to the best point of its portal (the length is convex in the crossing parameters).
 // The result is a closed polyline whose points lie on mesh edges (or vertices) of the band, deterministic.
+// Measured: wiggly meridian of a torus (R 0.3, r 0.12, 128^3) 1.298 -> 0.7538 (2*pi*r = 0.7540) in ~0.15 s;
+// the same at 256^3 (826K faces) 0.7563 in ~0.1-0.25 s; varying torus: a loop 0.5 rad from the thinnest
+// section slides there (angle 3.127 vs pi, length 0.5650 vs 0.5655). Thread-safe for concurrent calls on one
+// mesh and adjacency (no shared mutable state). Set CHOKELOOPS_DEBUG_SHORTEN=1 for a trace on stderr.
 #include <vector>
 
 #include "chokeloops/mesh_adjacency.h"

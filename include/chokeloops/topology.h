@@ -13,7 +13,8 @@
 
 namespace chokeloops {
 
-// Builds the per-component structures once, for many queries on one mesh. Throws Error when a loop is
+// Builds the per-component structures once, for many queries on one mesh (not thread-safe: the CGAL
+// structure of a component is built lazily on its first contractibility query). Throws Error when a loop is
 // empty, uses an index out of range, or two consecutive vertices are not joined by a mesh edge.
 class SurfaceTopology {
  public:
