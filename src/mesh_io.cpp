@@ -120,8 +120,10 @@ PlyHeader read_ply_header(const std::string& path) {
   throw Error(q(path) + ": truncated PLY header (no end_header)");
 }
 
+void diagnose_faces(const std::string& path, const std::string& ext);
+
 // ---- diagnostics for ASCII files CGAL refused: find the first non-finite number ----
-void diagnose_ascii(const std::string& path) {
+void diagnose_ascii(const std::string& path, const std::string& ext) {
   std::ifstream in(path);
   std::string line;
   std::size_t lineno = 0;
@@ -136,6 +138,72 @@ void diagnose_ascii(const std::string& path) {
       if (t == "nan" || t == "inf" || t == "infinity" || t.rfind("nan(", 0) == 0)
         throw Error(q(path) + ": non-finite coordinate '" + tok + "' on line " + std::to_string(lineno));
     }
+  }
+  diagnose_faces(path, ext);
+}
+
+// OBJ / OFF: faces referencing missing vertices, or no faces at all.
+void diagnose_faces(const std::string& path, const std::string& ext) {
+  std::ifstream in(path);
+  std::string line;
+  auto bad_index = [&](long long idx, long long nv, std::size_t face) {
+    std::ostringstream s;
+    s << q(path) << ": face " << face << " references vertex " << idx << " but the file has only " << nv
+      << " vertices";
+    throw Error(s.str());
+  };
+  if (ext == ".obj") {
+    long long nv = 0;
+    std::size_t nf = 0;
+    std::vector<std::string> faces;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string kw;
+      ls >> kw;
+      if (kw == "v") ++nv;
+      else if (kw == "f") {
+        std::string tok;
+        while (ls >> tok) {
+          long long idx = std::atoll(tok.c_str());  // "i/t/n" → i
+          long long abs_idx = idx < 0 ? nv + idx + 1 : idx;
+          if (idx == 0 || abs_idx < 1 || abs_idx > nv) bad_index(idx, nv, nf);
+        }
+        ++nf;
+      }
+    }
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+  } else if (ext == ".off") {
+    std::vector<std::string> toks;
+    std::string tok;
+    // tokens without comments
+    while (std::getline(in, line)) {
+      auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      std::istringstream ls(line);
+      while (ls >> tok) toks.push_back(tok);
+      if (toks.size() > 50000000) return;
+    }
+    std::size_t t = 0;
+    if (t < toks.size() && toks[t].find("OFF") != std::string::npos) ++t;
+    if (t + 3 > toks.size()) return;
+    auto is_int = [](const std::string& x) {
+      return !x.empty() && std::all_of(x.begin(), x.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+    };
+    if (!is_int(toks[t]) || !is_int(toks[t + 1]) || !is_int(toks[t + 2])) return;
+    long long nv = std::atoll(toks[t].c_str()), nf = std::atoll(toks[t + 1].c_str());
+    t += 3;
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+    t += std::size_t(std::max(0LL, nv)) * 3;
+    for (long long f = 0; f < nf && t < toks.size(); ++f) {
+      long long k = std::atoll(toks[t++].c_str());
+      for (long long j = 0; j < k && t < toks.size(); ++j) {
+        long long idx = std::atoll(toks[t++].c_str());
+        if (idx < 0 || idx >= nv) bad_index(idx, nv, std::size_t(f));
+      }
+      // skip optional colour values up to the next face: not handled (rare); stop at mismatch
+    }
+    if (t < toks.size() && std::size_t(nv) * 3 + 3 < toks.size()) return;
+    if (toks.size() < t) throw Error(q(path) + ": truncated OFF file");
   }
 }
 
@@ -241,7 +309,7 @@ TriangleMesh read_mesh(const std::string& path) {
     throw Error(q(path) + ": cannot parse as " + format + " (" + m + ")");
   }
   if (!ok) {
-    if (!binary) diagnose_ascii(path);
+    if (!binary) diagnose_ascii(path, ext);
     throw Error(q(path) + ": cannot parse as " + (binary ? "binary " : "") + format + " (malformed or truncated file)");
   }
   if (ext == ".ply" && (points.size() != ply.vertex_count || polygons.size() != ply.face_count)) {
