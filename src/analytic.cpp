@@ -155,3 +155,16 @@ void add_uniform_noise(ScalarGrid& grid, double amplitude, std::uint64_t seed) {
 }
 
 }  // namespace chokeloops
+
+namespace chokeloops::analytic {
+
+Sdf hollow_ball_through_hole(double outer, double inner, double hole_r, Vec3 c) {
+  return [=](double x, double y, double z) {
+    double rho = length3(x - c[0], y - c[1], z - c[2]);
+    double shell = std::max(rho - outer, inner - rho);
+    double hole = capped_cylinder_x(x, y, z, c[0] - 2 * outer, c[0] + 2 * outer, c[1], c[2], hole_r);
+    return std::max(shell, -hole);
+  };
+}
+
+}  // namespace chokeloops::analytic

@@ -12,8 +12,8 @@
 // Details that matter (from the prototype notes in DESIGN §3): the seeds are exactly the two pieces of
 // {v below the saddle} that the choke simplex joins (the pair's lobes), found inside the box, and the flood
 // then absorbs every other piece; the connectivity is the Freudenthal complex's (14 neighbours) everywhere;
-// the box grows when the interface does not close inside it and shrinks when both lobes are already joined
-// inside it (a short handle wholly inside the box).
+// the seed pieces are found in a small box of about the depth (around a handle they join farther away),
+// and the flood box grows until the interface closes on the surface near the choke.
 #include "chokeloops/membranes.h"
 
 #include <tbb/parallel_for.h>
@@ -45,19 +45,17 @@ class LoopTracer {
     const double h = g_.voxel_size;
     const int full = std::max({g_.dims[0], g_.dims[1], g_.dims[2]});
     int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
-    bool grew = false, shrank = false;
+    int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
     Polyline3 raw;
-    for (int attempt = 0; attempt < 12; ++attempt) {
-      Attempt a = try_box(c, r, raw);
+    for (int attempt = 0; attempt < 16; ++attempt) {
+      Attempt a = try_box(c, r, seed_r, raw);
       if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
       if (a == Attempt::Grow) {
-        if (r >= full || shrank) break;
+        if (r >= full) break;
         r = std::min(full, int(std::ceil(r * 1.8)));
-        grew = true;
       } else {
-        if (r <= 2 || grew) break;
-        r = std::max(2, r * 2 / 3);
-        shrank = true;
+        if (seed_r <= 1) break;
+        seed_r = seed_r * 2 / 3;
       }
     }
     if (!loop.found) {
@@ -69,10 +67,11 @@ class LoopTracer {
     if (options.shorten) {
       ShortenOptions so;
       so.max_move = c.depth + 3 * h;
-      ShortenResult res = shorten_polyline(S_, A_, raw, so);
-      if (res.rings == 0) loop.note = "not shortened: no annulus band around the loop";
-      if (res.points.size() >= 3) loop.points = res.points;
-      loop.edge_path = res.edge_path;
+      ShortenResult best = shorten_polyline(S_, A_, raw, so);
+      if (best.rings == 0) loop.note = "not shortened: no annulus band around the loop";
+      if (best.rings > 0 && options.slide) slide_to_narrowest(best, so, c.depth + 2 * h);
+      if (best.points.size() >= 3) loop.points = best.points;
+      loop.edge_path = best.edge_path;
     } else {
       loop.edge_path = snap_polyline_to_edge_path(S_, raw);
     }
@@ -81,6 +80,73 @@ class LoopTracer {
   }
 
  private:
+  // On a tube whose radius barely changes, the grid saddle lands anywhere along a flat ridge and local
+  // shortening cannot feel the narrowing. Translating the loop along its own normal and shortening again
+  // samples the nearby cross-sections; the shortest valid one is kept (it moves at most `reach`).
+  void slide_to_narrowest(ShortenResult& best, const ShortenOptions& so, double reach) const {
+    Loop probe;
+    probe.points = best.points;
+    describe(probe);
+    // Small steps from the current best, repeated while they help, follow a tube that bends.
+    double travelled = 0;
+    for (int round = 0; round < 6 && travelled < reach; ++round) {
+      describe(probe);
+      const auto n = probe.normal;
+      const Polyline3 start = best.points;
+      const double length_before = best.length;
+      double moved_by = 0;
+      for (double f : {0.25, 0.5})
+        for (double sign : {-1.0, 1.0}) {
+          double step = sign * f * reach;
+          Polyline3 moved = start;
+          for (auto& p : moved)
+            for (int a = 0; a < 3; ++a) p[a] += step * n[a];
+          // Only a loop on a tube slides along it: every moved point must stay on the surface (|phi|
+          // small); otherwise snapping could change its homotopy class.
+          double off = 0;
+          for (auto& p : moved) off = std::max(off, std::abs(phi_at(p)));
+          if (off > 2 * g_.voxel_size) continue;
+          ShortenResult r;
+          try {
+            r = shorten_polyline(S_, A_, moved, so);
+          } catch (const Error&) {
+            continue;  // the moved loop left the surface (e.g. past the end of the tube)
+          }
+          if (r.rings > 0 && r.points.size() >= 3 && loop_is_simple(r.edge_path) && r.length < best.length) {
+            best = std::move(r);
+            moved_by = std::abs(step);
+          }
+        }
+      if (best.length >= length_before) break;
+      travelled += moved_by;
+      probe.points = best.points;
+    }
+  }
+
+  // Trilinear interpolation of the grid at a world point (clamped to the box).
+  double phi_at(const std::array<double, 3>& p) const {
+    std::array<int, 3> i0;
+    std::array<double, 3> t;
+    for (int a = 0; a < 3; ++a) {
+      double u = (p[a] - g_.origin[a]) / g_.voxel_size;
+      u = std::min(std::max(u, 0.0), double(g_.dims[a] - 1) - 1e-9);
+      i0[a] = std::min(int(u), g_.dims[a] - 2);
+      t[a] = u - i0[a];
+    }
+    double v = 0;
+    for (int c = 0; c < 8; ++c) {
+      double w = 1;
+      std::array<int, 3> q;
+      for (int a = 0; a < 3; ++a) {
+        int bit = c >> a & 1;
+        q[a] = i0[a] + bit;
+        w *= bit ? t[a] : 1 - t[a];
+      }
+      v += w * g_.values[g_.index(q[0], q[1], q[2])];
+    }
+    return v;
+  }
+
   static void describe(Loop& loop) {
     const auto& P = loop.points;
     loop.length = closed_length(P);
@@ -113,7 +179,7 @@ class LoopTracer {
     return (it != S_.vertex_edge.end() && *it == edge) ? int(it - S_.vertex_edge.begin()) : -1;
   }
 
-  Attempt try_box(const Choke& c, int r, Polyline3& out) const {
+  Attempt try_box(const Choke& c, int r, int seed_radius, Polyline3& out) const {
     const bool handle = c.side == Side::Handle;
     const Id s = c.saddle;
     // "Below" = earlier in the flood's order: the filtration for handles, its reverse for tunnels.
@@ -144,7 +210,14 @@ class LoopTracer {
     };
     std::vector<std::int8_t> label(lz * n[2], 0);
 
-    // Seeds: the two pieces of {below the saddle} inside the box that hold the lobes.
+    // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
+    // choke's depth; around a handle they join farther away, which the flood below must not see.
+    const int seed_r = std::min(r, seed_radius);
+    auto in_seed_box = [&](const std::array<int, 3>& p) {
+      for (int a = 0; a < 3; ++a)
+        if (std::abs(lo[a] + p[a] - sc[a]) > seed_r) return false;
+      return true;
+    };
     std::vector<Node> seeds;
     for (int side = 0; side < 2; ++side) {
       std::vector<Node> stack;
@@ -176,7 +249,7 @@ class LoopTracer {
         seeds.push_back(x);
         bool joined = false;
         for_neighbours(x, [&](const Node& u) {
-          if (!below(u.v)) return;
+          if (!below(u.v) || !in_seed_box(u.p)) return;
           std::int8_t& l = label[u.li];
           if (l == 0) { l = std::int8_t(side + 1); stack.push_back(u); }
           else if (l != side + 1) joined = true;

@@ -52,6 +52,10 @@ Sdf dumbbell(double ball_r = 0.2, double neck_r = 0.12, double half_length = 0.2
 // (b ~ hole_r, d ~ inner). Difference by max(shell, -cylinder): approximate near the hole's rim.
 Sdf pierced_hollow_ball(double outer = 0.4, double inner = 0.25, double hole_r = 0.06, Vec3 c = kCentre);
 
+// The same shell drilled straight through both walls along x: genus 1 (the hole is a handle/tunnel pair) and
+// the cavity, open to the outside at two mouths, gives one additional tunnel choke.
+Sdf hollow_ball_through_hole(double outer = 0.4, double inner = 0.25, double hole_r = 0.06, Vec3 c = kCentre);
+
 // Torus (axis z, major radius R) whose tube radius varies with the angle t around the axis:
 // r(t) = r0 + amp*cos(t) (thinnest at t = pi, i.e. on the -x side). Approximate SDF:
 // sqrt((rho - R)^2 + z^2) - r(t), whose gradient norm is within 1 +- amp/(R - r0 - amp) of 1.

@@ -17,6 +17,7 @@ namespace chokeloops {
 
 struct LoopOptions {
   bool shorten = true;
+  bool slide = true;         // after shortening, slide the loop along its normal to the narrowest section
   double box_factor = 1.5;   // local box half-size = box_factor * depth + box_margin voxels (grown on demand)
   int box_margin = 3;
 };

@@ -1,0 +1,211 @@
+// End-to-end loops on analytic shapes whose answer is known (issue 4): counts, positions and lengths of
+// the loops, and their topology on the output surface checked with CGAL's Surface_mesh_topology.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unordered_map>
+#include <nlohmann/json.hpp>
+
+#include "analytic_fields.h"
+#include "chokeloops/analyze.h"
+#include "chokeloops/mesh_adjacency.h"
+#include "chokeloops/topology.h"
+
+using namespace chokeloops;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+AnalyzeResult run(const Sdf& sdf, int n, std::array<double, 3> lo, std::array<double, 3> hi,
+                  const std::string& d_max = "50%", const std::string& min_persistence = "10%") {
+  AnalyzeOptions o;
+  o.chokes.d_max = Threshold::parse(d_max);
+  o.chokes.min_persistence = Threshold::parse(min_persistence);
+  return analyze_grid(sample_field({n, n, n}, sdf, lo, hi), o);
+}
+
+std::vector<const Loop*> loops_of(const AnalyzeResult& r, Side side, Kind kind) {
+  std::vector<const Loop*> out;
+  for (auto& l : r.loops)
+    if (l.choke.side == side && l.choke.kind == kind) out.push_back(&l);
+  return out;
+}
+
+double point_triangle_distance(const std::array<double, 3>& p, const std::array<double, 3>& a,
+                               const std::array<double, 3>& b, const std::array<double, 3>& c) {
+  // Ericson, Real-Time Collision Detection, 5.1.5.
+  auto sub = [](auto x, auto y) { return std::array<double, 3>{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
+  auto dot = [](auto x, auto y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+  auto ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  std::array<double, 3> q;
+  auto at = [&](double v, double w) { return std::array<double, 3>{a[0] + v * ab[0] + w * ac[0], a[1] + v * ab[1] + w * ac[1], a[2] + v * ab[2] + w * ac[2]}; };
+  auto bp = sub(p, b);
+  double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  auto cp = sub(p, c);
+  double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  if (d1 <= 0 && d2 <= 0) q = a;
+  else if (d3 >= 0 && d4 <= d3) q = b;
+  else if (vc <= 0 && d1 >= 0 && d3 <= 0) q = at(d1 / (d1 - d3), 0);
+  else if (d6 >= 0 && d5 <= d6) q = c;
+  else if (vb <= 0 && d2 >= 0 && d6 <= 0) q = at(0, d2 / (d2 - d6));
+  else if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    q = {b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2])};
+  } else {
+    double den = 1 / (va + vb + vc);
+    q = at(vb * den, vc * den);
+  }
+  auto d = sub(p, q);
+  return std::sqrt(dot(d, d));
+}
+
+// Faces of a surface bucketed by the grid cells their bounding boxes touch.
+struct FaceHash {
+  double cell;
+  std::unordered_map<std::int64_t, std::vector<int>> buckets;
+  std::int64_t key(std::int64_t i, std::int64_t j, std::int64_t k) const { return (i * 73856093) ^ (j * 19349663) ^ (k * 83492791); }
+  FaceHash(const SurfaceMesh& m, double voxel) : cell(voxel) {
+    for (int f = 0; f < int(m.faces.size()); ++f) {
+      std::array<std::int64_t, 3> lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        double mn = 1e300, mx = -1e300;
+        for (int q = 0; q < 3; ++q) { mn = std::min(mn, m.vertices[m.faces[f][q]][a]); mx = std::max(mx, m.vertices[m.faces[f][q]][a]); }
+        lo[a] = std::int64_t(std::floor(mn / cell)) - 1;
+        hi[a] = std::int64_t(std::floor(mx / cell)) + 1;
+      }
+      for (auto i = lo[0]; i <= hi[0]; ++i)
+        for (auto j = lo[1]; j <= hi[1]; ++j)
+          for (auto k = lo[2]; k <= hi[2]; ++k) buckets[key(i, j, k)].push_back(f);
+    }
+  }
+  const std::vector<int>& near(const std::array<double, 3>& p) const {
+    static const std::vector<int> none;
+    auto it = buckets.find(key(std::int64_t(std::floor(p[0] / cell)), std::int64_t(std::floor(p[1] / cell)), std::int64_t(std::floor(p[2] / cell))));
+    return it == buckets.end() ? none : it->second;
+  }
+};
+
+// Every loop found, closed, simple, on the surface; generators non-contractible, chokes separating.
+// `chokes_separate`: false when an additional loop may be homologous to a generator (a cavity with two
+// mouths: one mouth is the tunnel generator, the other the choke; neither separates the surface).
+void expect_valid_loops(const AnalyzeResult& r, bool chokes_separate = true) {
+  SurfaceTopology topo(r.surface);
+  FaceHash hash(r.surface, r.grid.voxel_size);
+  for (const Loop& l : r.loops) {
+    SCOPED_TRACE(std::string(to_string(l.choke.side)) + " " + to_string(l.choke.kind) + " depth " + std::to_string(l.choke.depth));
+    ASSERT_TRUE(l.found) << l.note;
+    ASSERT_GE(l.points.size(), 3u);
+    ASSERT_TRUE(loop_is_simple(l.edge_path));
+    // On the surface: each point within 1e-6 voxel of some face (faces hashed by their bounding boxes).
+    double worst = 0;
+    for (auto& p : l.points) {
+      double best = 1e300;
+      for (int f : hash.near(p)) {
+        auto& F = r.surface.faces[f];
+        best = std::min(best, point_triangle_distance(p, r.surface.vertices[F[0]], r.surface.vertices[F[1]], r.surface.vertices[F[2]]));
+      }
+      worst = std::max(worst, best);
+    }
+    EXPECT_LT(worst, 1e-6 * r.grid.voxel_size + 1e-12);
+    // An additional loop passes near its choke point: within its depth (the membrane's radius) plus the
+    // slide toward the narrowest section (at most depth + 2 voxels) plus discretisation. Generators are
+    // exempt: their saddle may lie anywhere on a flat core (a tube's ridge, a shell's mid-surface); they
+    // are checked by non-contractibility and, per shape, by where they must be.
+    double near = 1e300;
+    for (auto& p : l.points)
+      near = std::min(near, std::hypot(p[0] - l.choke.point[0], p[1] - l.choke.point[1], p[2] - l.choke.point[2]));
+    if (l.choke.kind == Kind::Choke) EXPECT_LE(near, 2 * l.choke.depth + 4 * r.grid.voxel_size);
+    if (l.choke.kind == Kind::Generator) EXPECT_FALSE(topo.contractible(l.edge_path));
+    else if (chokes_separate) EXPECT_TRUE(topo.separates(l.edge_path));
+  }
+}
+
+}  // namespace
+
+TEST(AnalyzeAnalytic, VaryingTorusHandleAtThinnestSection) {
+  // Tube radius 0.15 + 0.06 cos t around R = 0.5: thinnest (0.09) at t = pi, i.e. on the -x side.
+  const int n = 192;
+  AnalyzeResult r = run(analytic::varying_torus(), n, {-0.25, -0.25, -0.25}, {1.25, 1.25, 1.25});
+  EXPECT_EQ(r.surface_stats.genus, 1);
+  auto handles = loops_of(r, Side::Handle, Kind::Generator);
+  auto tunnels = loops_of(r, Side::Tunnel, Kind::Generator);
+  ASSERT_EQ(handles.size(), 1u);
+  ASSERT_EQ(tunnels.size(), 1u);
+  const Loop& h = *handles[0];
+  ASSERT_TRUE(h.found) << h.note;
+  const double voxel = r.grid.voxel_size;
+  // The thinnest section is the half-plane y = 0.5, x < 0.5: every loop point within 2 voxels of it.
+  double off = 0;
+  for (auto& p : h.points) off = std::max(off, std::abs(p[1] - 0.5));
+  EXPECT_LE(off, 2 * voxel);
+  EXPECT_LT(h.centroid[0], 0.5 - 0.3);
+  EXPECT_NEAR(h.length, 2 * kPi * 0.09, 0.05 * 2 * kPi * 0.09);
+  expect_valid_loops(r);
+}
+
+TEST(AnalyzeAnalytic, DumbbellHasOneNeckLoop) {
+  // Two balls (r 0.2) joined by a neck of radius 0.12: the neck's depth is 60% of R_in, so d_max 75%.
+  AnalyzeResult r = run(analytic::dumbbell(), 128, {0, 0, 0}, {1, 1, 1}, "75%", "10%");
+  EXPECT_EQ(r.chokes.handle_generators, 0);
+  EXPECT_EQ(r.chokes.tunnel_generators, 0);
+  auto necks = loops_of(r, Side::Handle, Kind::Choke);
+  ASSERT_EQ(necks.size(), 1u);
+  EXPECT_TRUE(loops_of(r, Side::Tunnel, Kind::Choke).empty());
+  const Loop& neck = *necks[0];
+  EXPECT_NEAR(neck.length, 2 * kPi * 0.12, 0.05 * 2 * kPi * 0.12);
+  EXPECT_NEAR(std::abs(neck.normal[0]), 1.0, 0.02);  // the neck loop goes around the x axis
+  expect_valid_loops(r);
+}
+
+TEST(AnalyzeAnalytic, DoubleTorusHasTwoPlusTwoGenerators) {
+  AnalyzeResult r = run(analytic::double_torus(), 128, {0, 0, 0}, {1, 1, 1});
+  EXPECT_EQ(r.surface_stats.genus, 2);
+  auto handles = loops_of(r, Side::Handle, Kind::Generator);
+  auto tunnels = loops_of(r, Side::Tunnel, Kind::Generator);
+  ASSERT_EQ(handles.size(), 2u);
+  ASSERT_EQ(tunnels.size(), 2u);
+  for (auto* l : handles) EXPECT_NEAR(l->length, 2 * kPi * 0.07, 0.05 * 2 * kPi * 0.07);
+  for (auto* l : tunnels) EXPECT_NEAR(l->length, 2 * kPi * 0.10, 0.05 * 2 * kPi * 0.10);
+  expect_valid_loops(r);
+}
+
+TEST(AnalyzeAnalytic, HollowBallWithThroughHoleHasTheCavityMouth) {
+  // Shell 0.25..0.4 drilled through along x (hole radius 0.06): genus 1, and the cavity, open at two
+  // mouths, is one more tunnel choke whose loop is a mouth of the hole.
+  AnalyzeResult r = run(analytic::hollow_ball_through_hole(), 128, {0, 0, 0}, {1, 1, 1});
+  EXPECT_EQ(r.surface_stats.genus, 1);
+  EXPECT_EQ(loops_of(r, Side::Handle, Kind::Generator).size(), 1u);
+  EXPECT_EQ(loops_of(r, Side::Tunnel, Kind::Generator).size(), 1u);
+  auto mouths = loops_of(r, Side::Tunnel, Kind::Choke);
+  ASSERT_EQ(mouths.size(), 1u);
+  EXPECT_NEAR(mouths[0]->choke.depth, 0.06, 2 * r.grid.voxel_size);
+  EXPECT_NEAR(mouths[0]->length, 2 * kPi * 0.06, 0.08 * 2 * kPi * 0.06);
+  expect_valid_loops(r, false);
+  SurfaceTopology topo(r.surface);
+  EXPECT_FALSE(topo.contractible(mouths[0]->edge_path));  // homologous to the other mouth (the generator)
+}
+
+TEST(AnalyzeAnalytic, SameReportWithOneAndTwoThreads) {
+  auto report = [](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    AnalyzeOptions o;
+    AnalyzeResult r = analyze_grid(sample_field({96, 96, 96}, analytic::double_torus()), o);
+    auto dir = std::filesystem::temp_directory_path() / ("chokeloops_threads_" + std::to_string(threads));
+    write_report(r, o, dir.string());
+    nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "loops.json"));
+    j.erase("timings_ms");
+    std::ifstream ply(dir / "surface.ply", std::ios::binary);
+    std::string surface((std::istreambuf_iterator<char>(ply)), std::istreambuf_iterator<char>());
+    std::filesystem::remove_all(dir);
+    return j.dump() + surface;
+  };
+  std::string one = report(1), two = report(2);
+  EXPECT_GT(one.size(), 1000u);
+  EXPECT_TRUE(one == two);
+}
