@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Fresh machine → install, build (Release), and run the main job on the bundled kitten:
+# loops in out/kitten/ (surface.ply, loops.ply, loops.obj, loops.json, view.html) and a picture out/kitten.png.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh
+./build/chokeloops analyze data/kitten.obj -o out/kitten --png out/kitten.png "$@"
