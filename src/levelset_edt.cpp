@@ -99,22 +99,31 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
   });
   // pass y and z: gather/scatter strided lines, a few at a time for cache
   auto strided = [&](int n, std::size_t stride, int lines_outer, int lines_inner, std::size_t outer_stride) {
+    constexpr int B = 16;  // neighbouring lines gathered together: contiguous reads of B values
     tbb::parallel_for(tbb::blocked_range<int>(0, lines_outer), [&](const tbb::blocked_range<int>& r) {
       std::vector<int> v(n + 1);
       std::vector<double> z(n + 2);
-      std::vector<float> fo(n), fl(n);
-      std::vector<std::int32_t> io(n), il(n);
+      std::vector<float> fo(n), fl(std::size_t(n) * B);
+      std::vector<std::int32_t> io(n), il(std::size_t(n) * B);
       for (int o = r.begin(); o != r.end(); ++o)
-        for (int i = 0; i < lines_inner; ++i) {
-          const std::size_t base = std::size_t(o) * outer_stride + std::size_t(i);
+        for (int i0 = 0; i0 < lines_inner; i0 += B) {
+          const int nb = std::min(B, lines_inner - i0);
+          const std::size_t base = std::size_t(o) * outer_stride + std::size_t(i0);
           for (int q = 0; q < n; ++q) {
-            fl[q] = D[base + q * stride];
-            il[q] = F[base + q * stride];
+            const std::size_t row = base + std::size_t(q) * stride;
+            for (int b = 0; b < nb; ++b) {
+              fl[std::size_t(b) * n + q] = D[row + b];
+              il[std::size_t(b) * n + q] = F[row + b];
+            }
           }
-          envelope_line(n, fl.data(), il.data(), v, z, fo, io);
+          for (int b = 0; b < nb; ++b)
+            envelope_line(n, &fl[std::size_t(b) * n], &il[std::size_t(b) * n], v, z, fo, io);
           for (int q = 0; q < n; ++q) {
-            D[base + q * stride] = fl[q];
-            F[base + q * stride] = il[q];
+            const std::size_t row = base + std::size_t(q) * stride;
+            for (int b = 0; b < nb; ++b) {
+              D[row + b] = fl[std::size_t(b) * n + q];
+              F[row + b] = il[std::size_t(b) * n + q];
+            }
           }
         }
     });
@@ -133,40 +142,53 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
     const double dx = i - p[0], dy = j - p[1], dz = k - p[2];
     return dx * dx + dy * dy + dz * dz;
   };
-  const std::size_t sx = 1, sy = std::size_t(nx), sz = std::size_t(nx) * ny;
+  const std::size_t sy = std::size_t(nx), sz = std::size_t(nx) * ny;
+  auto better = [&](std::size_t idx, int i, int j, int k, std::int32_t cand) {
+    const std::int32_t cur = F[idx];
+    if (cand < 0 || cand == cur) return;
+    if (cur < 0 || d2(i, j, k, cand) < d2(i, j, k, cur)) F[idx] = cand;
+  };
   auto relax_axis = [&](int axis) {
-    const int n = axis == 0 ? nx : axis == 1 ? ny : nz;
-    const std::size_t stride = axis == 0 ? sx : axis == 1 ? sy : sz;
-    const int na = axis == 0 ? ny : nx, nb = axis == 2 ? ny : nz;  // the two other axes
-    tbb::parallel_for(tbb::blocked_range<int>(0, nb), [&](const tbb::blocked_range<int>& r) {
-      for (int b = r.begin(); b != r.end(); ++b)
-        for (int a = 0; a < na; ++a) {
-          int ijk[3];
-          auto set = [&](int q) {
-            if (axis == 0) { ijk[0] = q; ijk[1] = a; ijk[2] = b; }
-            else if (axis == 1) { ijk[0] = a; ijk[1] = q; ijk[2] = b; }
-            else { ijk[0] = a; ijk[1] = b; ijk[2] = q; }
-          };
-          set(0);
-          const std::size_t base = std::size_t(grid.index(ijk[0], ijk[1], ijk[2]));
-          for (int dir = 0; dir < 2; ++dir) {
-            std::int32_t carry = -1;
-            for (int t = 0; t < n; ++t) {
-              const int q = dir == 0 ? t : n - 1 - t;
-              const std::size_t idx = base + std::size_t(q) * stride;
-              std::int32_t cur = F[idx];
-              if (carry >= 0 && carry != cur) {
-                set(q);
-                if (cur < 0 || d2(ijk[0], ijk[1], ijk[2], carry) < d2(ijk[0], ijk[1], ijk[2], cur)) {
-                  F[idx] = carry;
-                  cur = carry;
-                }
-              }
-              carry = cur;
-            }
-          }
+    if (axis == 0) {  // along x: each row in both directions
+      tbb::parallel_for(tbb::blocked_range<int>(0, ny * nz, 16), [&](const tbb::blocked_range<int>& r) {
+        for (int line = r.begin(); line != r.end(); ++line) {
+          const int j = line % ny, k = line / ny;
+          const std::size_t base = std::size_t(line) * nx;
+          for (int i = 1; i < nx; ++i) better(base + i, i, j, k, F[base + i - 1]);
+          for (int i = nx - 2; i >= 0; --i) better(base + i, i, j, k, F[base + i + 1]);
         }
-    });
+      });
+    } else if (axis == 1) {  // along y: whole rows against the previous row, per z slice
+      tbb::parallel_for(tbb::blocked_range<int>(0, nz), [&](const tbb::blocked_range<int>& r) {
+        for (int k = r.begin(); k != r.end(); ++k) {
+          for (int j = 1; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+              const std::size_t idx = std::size_t(grid.index(i, j, k));
+              better(idx, i, j, k, F[idx - sy]);
+            }
+          for (int j = ny - 2; j >= 0; --j)
+            for (int i = 0; i < nx; ++i) {
+              const std::size_t idx = std::size_t(grid.index(i, j, k));
+              better(idx, i, j, k, F[idx + sy]);
+            }
+        }
+      });
+    } else {  // along z: per y row, slices against the previous slice
+      tbb::parallel_for(tbb::blocked_range<int>(0, ny), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j != r.end(); ++j) {
+          for (int k = 1; k < nz; ++k)
+            for (int i = 0; i < nx; ++i) {
+              const std::size_t idx = std::size_t(grid.index(i, j, k));
+              better(idx, i, j, k, F[idx - sz]);
+            }
+          for (int k = nz - 2; k >= 0; --k)
+            for (int i = 0; i < nx; ++i) {
+              const std::size_t idx = std::size_t(grid.index(i, j, k));
+              better(idx, i, j, k, F[idx + sz]);
+            }
+        }
+      });
+    }
   };
   const int rounds = 2;  // measured: 0 rounds 0.73, 2 rounds 0.25, 4 rounds 0.18 voxel max error
   for (int round = 0; round < rounds; ++round)
