@@ -157,7 +157,7 @@ TEST(Surface, Extracts256CubedQuickly) {
   double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("256^3 gyroid: %zu vertices, %zu faces in %.3f s\n", m.vertices.size(), m.faces.size(), sec);
   EXPECT_GT(m.faces.size(), 2000000u);
-  EXPECT_LT(sec, 3.0);  // 0.48 s on an idle 2-core machine; the bound leaves room for a loaded one
+  EXPECT_LT(sec, 4.0);  // 0.48 s on an idle 2-core machine, ~2 s with four builds running; room for load
   auto s = surface_stats(m);
   EXPECT_EQ(s.nonmanifold_edges, 0);
   EXPECT_EQ(s.nonmanifold_vertices, 0);
