@@ -161,9 +161,10 @@ double default_margin(double longest_side, double voxel_size) {
   return std::max(0.1 * longest_side, 4.0 * voxel_size);
 }
 
-// Measured (bench_levelset, ru_maxrss): OpenVDB working set (distance + index + masks + fast sweeping)
-// plus the dense copy come to about 20-28 bytes per box vertex; 32 keeps a margin.
-std::size_t estimate_levelset_bytes(std::size_t box_voxels) { return box_voxels * 32 + (std::size_t(64) << 20); }
+// Measured with bench_levelset (ru_maxrss): dense values (4 B) + feature transform distance and site
+// id (8 B) + sites and OpenVDB's narrow band come to 16-23 bytes per box vertex (bunny 23.9M vertices:
+// 374-468 MB peak); 24 B + 64 MB keeps a margin.
+std::size_t estimate_levelset_bytes(std::size_t box_voxels) { return box_voxels * 24 + (std::size_t(64) << 20); }
 
 std::size_t physical_memory_bytes() {
   std::ifstream in("/proc/meminfo");

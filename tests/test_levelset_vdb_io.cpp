@@ -125,3 +125,66 @@ TEST(VdbIo, Errors) {
   for (auto& s : {m}) EXPECT_EQ(s.find('\n'), std::string::npos);
   fs::remove_all(dir);
 }
+
+#include "chokeloops/levelset.h"
+
+TEST(LevelSetVdbInput, NarrowBandSphereIsExtendedToThePaddedBox) {
+  ensure_openvdb_initialized();
+  const float r = 1.0f, h = 0.05f;
+  auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(r, openvdb::Vec3f(0, 0, 0), h, 3.f);
+  LevelSetOptions o;
+  o.quiet = true;
+  LevelSetResult res = levelset_from_vdb(sphere, o, "sphere");
+  EXPECT_EQ(res.source, "vdb level set");
+  const ScalarGrid& g = res.grid;
+  // box = surface bbox (about ±1) padded by 10% of 2 = 0.2 → about ±1.2
+  EXPECT_LE(g.origin[0], -1.15);
+  EXPECT_GE(g.origin[0], -1.3);
+  double worst = 0;
+  std::size_t wrong_sign = 0;
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) {
+        auto x = g.world({i, j, k});
+        double d = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) - r;
+        double phi = g.values[g.index(i, j, k)];
+        worst = std::max(worst, std::abs(phi - d));
+        if (std::abs(d) > h && (phi < 0) != (d < 0)) ++wrong_sign;
+      }
+  std::printf("vdb narrow-band sphere extended by fast sweeping: max error %.3f voxel\n", worst / h);
+  EXPECT_EQ(wrong_sign, 0u);
+  EXPECT_LE(worst, 2.0 * h);  // first-order fast sweeping far from the band
+}
+
+TEST(LevelSetVdbInput, FogVolumeBecomesSignedDistanceAtIso) {
+  ensure_openvdb_initialized();
+  auto fog = openvdb::FloatGrid::create(0.f);
+  fog->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+  fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+  auto acc = fog->getAccessor();
+  // density 1 inside the ball of radius 1.0, smooth ramp to 0 over [1.0, 1.4]
+  for (int k = -16; k <= 16; ++k)
+    for (int j = -16; j <= 16; ++j)
+      for (int i = -16; i <= 16; ++i) {
+        double rr = 0.1 * std::sqrt(double(i * i + j * j + k * k));
+        double v = rr < 1.0 ? 1.0 : rr > 1.4 ? 0.0 : 1.0 - (rr - 1.0) / 0.4;
+        if (v > 0) acc.setValue(openvdb::Coord(i, j, k), float(v));
+      }
+  LevelSetOptions o;
+  o.quiet = true;
+  o.iso = 0.5;  // surface at r = 1.2
+  LevelSetResult res = levelset_from_vdb(fog, o, "fog");
+  EXPECT_EQ(res.source, "vdb fog");
+  const ScalarGrid& g = res.grid;
+  double worst = 0;
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) {
+        auto x = g.world({i, j, k});
+        double d = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) - 1.2;
+        if (std::abs(d) < 0.3) worst = std::max(worst, std::abs(g.values[g.index(i, j, k)] - d));
+      }
+  std::printf("fog sphere: max error near the iso surface %.3f voxel\n", worst / 0.1);
+  EXPECT_LE(worst, 0.1);
+  EXPECT_GT(res.inside_voxels, 0u);
+}
