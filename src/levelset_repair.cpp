@@ -164,6 +164,36 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
   r.input_faces = mesh.faces.size();
   const std::string who = "'" + name + "'";
 
+  // Fast path: a closed, consistently oriented, edge-manifold triangle mesh without repeated indices
+  // needs no repair (OpenVDB's conversion does not depend on the orientation); skip CGAL entirely.
+  {
+    bool clean = !mesh.faces.empty();
+    std::unordered_map<std::uint64_t, int> directed;
+    directed.reserve(mesh.faces.size() * 4);
+    for (auto& f : mesh.faces) {
+      if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) { clean = false; break; }
+      for (int k = 0; k < 3 && clean; ++k) {
+        const std::uint64_t key = (std::uint64_t(std::uint32_t(f[k])) << 32) | std::uint32_t(f[(k + 1) % 3]);
+        if (++directed[key] > 1) clean = false;
+      }
+      if (!clean) break;
+    }
+    if (clean)
+      for (auto& [key, n] : directed) {
+        const std::uint64_t rev = (key << 32) | (key >> 32);
+        if (directed.find(rev) == directed.end()) { clean = false; break; }
+      }
+    if (clean) {
+      MeshReport t = mesh_topology(mesh);
+      if (t.closed && t.nonmanifold_edges == 0 && t.genus >= 0) {
+        out.report = t;
+        out.mesh = mesh;
+        // drop unreferenced vertices from the counts only (they do not affect the distance)
+        return out;
+      }
+    }
+  }
+
   std::vector<Point> points;
   points.reserve(mesh.vertices.size());
   for (auto& v : mesh.vertices) points.emplace_back(v[0], v[1], v[2]);
