@@ -108,10 +108,16 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   for (auto& w : r.levelset_info.warnings) warnings.push_back(w);
   if (input_genus >= 0 && r.surface_stats.genus != input_genus) {
     // Never a silently different genus: find and name a resolution that keeps it.
-    std::string hint = "--resolution auto";
+    // Two finer grids at most (x1.5, x2.25), and only those that fit in memory.
+    std::string hint = "a finer --resolution (or --resolution auto)";
     if (resolution > 0) {
-      for (int res = int(resolution * 1.5); res <= 1024; res = int(res * 1.5))
+      std::size_t budget = ls_options.max_memory ? ls_options.max_memory : default_max_memory();
+      std::size_t voxels = r.grid.values.size();
+      for (double factor : {1.5, 2.25}) {
+        int res = int(resolution * factor);
+        if (estimate_levelset_bytes(std::size_t(double(voxels) * factor * factor * factor)) > budget) break;
         if (surface_genus_at(input, ls_options, res) == input_genus) { hint = "--resolution " + std::to_string(res); break; }
+      }
     }
     warnings.push_back("the grid is too coarse: the input mesh has genus " + std::to_string(input_genus) +
                        " but its surface at this resolution has genus " + std::to_string(r.surface_stats.genus) +
