@@ -402,8 +402,16 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
   res.margin = margin;
   const int pad = int(std::ceil(margin / h));
   openvdb::CoordBBox box(sb.min() - openvdb::Coord(pad), sb.max() + openvdb::Coord(pad));
-  const openvdb::CoordBBox active = sdf->evalActiveVoxelBoundingBox();
-  if (box.isInside(active) == false && o.margin < 0) box.expand(active);  // keep a box the file already had
+  const openvdb::CoordBBox active = input->evalActiveVoxelBoundingBox();
+  const bool dense_input = input->activeVoxelCount() == active.volume();
+  if (o.margin < 0 && dense_input && active.isInside(sb)) {
+    box = active;  // a dense grid (e.g. written by `chokeloops levelset`) keeps its own box
+    res.margin = double(std::min({sb.min()[0] - active.min()[0], sb.min()[1] - active.min()[1],
+                                  sb.min()[2] - active.min()[2], active.max()[0] - sb.max()[0],
+                                  active.max()[1] - sb.max()[1], active.max()[2] - sb.max()[2]})) * h;
+  } else if (o.margin < 0) {
+    box.expand(active);
+  }
   check_memory(box, o, h, longest, who);
   sdf = extend_to_box(sdf, box);
   res.grid = dense_from_grid(*sdf, box, who);

@@ -130,5 +130,6 @@ TEST(LevelSetManifest, CliWritesAReadableGrid) {
   LevelSetResult again = make_levelset(out, o);
   EXPECT_EQ(again.source, "vdb level set");
   EXPECT_EQ(again.grid.dims, g.dims);
+  EXPECT_EQ(again.grid.values, g.values);
   fs::remove_all(dir);
 }
