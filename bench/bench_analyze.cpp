@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   std::string tangle = (std::filesystem::temp_directory_path() / "chokeloops_tangle.vdb").string();
   {
     ScalarGrid g = sample_field({resolution + 1, resolution + 1, resolution + 1}, analytic::tangle_cube());
-    write_vdb(g, tangle, "tangle", false);
+    write_vdb(g, tangle, "tangle", true);  // a level set (not a distance): analyze renormalises it
   }
   // d_max and delta_min as in the paper's Table 1.
   std::vector<Model> models = {

@@ -32,6 +32,7 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   --png FILE                also render a picture of the surface and its loops (needs chromium)
   --no-view                 do not write view.html
   --no-shorten              keep the raw membrane loops (no geodesic shortening)
+  --no-slide                shorten only; do not slide loops along tubes to the narrowest section
   --quiet                   no progress on stderr
 Exit codes: 0 success, 2 bad input, 3 out of resources.
 )";
@@ -111,6 +112,7 @@ int run(std::vector<std::string> args) {
     else if (a == "--png") png = value();
     else if (a == "--no-view") view = false;
     else if (a == "--no-shorten") options.loops.shorten = false;
+    else if (a == "--no-slide") options.loops.slide = false;
     else if (a == "--quiet" || a == "-q") quiet = true;
     else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops analyze --help)");
     else if (input.empty()) input = a;
