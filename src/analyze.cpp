@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "chokeloops/mesh_adjacency.h"
+#include "chokeloops/topology.h"
 
 namespace chokeloops {
 
@@ -60,10 +61,26 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   MeshAdjacency adjacency = build_adjacency(r.surface);
   r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops);
   r.timings_ms["loops"] = ms_since(t);
+  // Never a silently wrong generator: each must be non-contractible on the surface (CGAL
+  // Surface_mesh_topology); one that is not is reported as missing.
+  t = Clock::now();
+  bool any_generator = false;
+  for (auto& l : r.loops) any_generator |= l.found && l.choke.kind == Kind::Generator;
+  if (any_generator && options.check_generators) {
+    SurfaceTopology topology(r.surface);
+    for (auto& l : r.loops)
+      if (l.found && l.choke.kind == Kind::Generator && topology.contractible(l.edge_path)) {
+        l.found = false;
+        l.note = "the membrane's interface curve is contractible on the surface (a flat core, e.g. a thin wall); no valid generator loop";
+        l.points.clear();
+        l.edge_path.clear();
+      }
+  }
+  r.timings_ms["check"] = ms_since(t);
   int missing = 0;
   for (auto& l : r.loops) missing += !l.found;
   if (missing)
-    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (membrane did not close); they are listed with empty points");
+    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
   stage("done", 1);
   r.timings_ms["total"] = ms_since(t_start);
   return r;

@@ -33,6 +33,8 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   --no-view                 do not write view.html
   --no-shorten              keep the raw membrane loops (no geodesic shortening)
   --no-slide                shorten only; do not slide loops along tubes to the narrowest section
+  --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
+                            seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
 Exit codes: 0 success, 2 bad input, 3 out of resources.
 )";
@@ -113,6 +115,7 @@ int run(std::vector<std::string> args) {
     else if (a == "--no-view") view = false;
     else if (a == "--no-shorten") options.loops.shorten = false;
     else if (a == "--no-slide") options.loops.slide = false;
+    else if (a == "--no-check") options.check_generators = false;
     else if (a == "--quiet" || a == "-q") quiet = true;
     else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops analyze --help)");
     else if (input.empty()) input = a;
@@ -143,9 +146,9 @@ int run(std::vector<std::string> args) {
               options.chokes.d_max.text().c_str(), r.chokes.d_max_handle, r.chokes.d_max_tunnel,
               options.chokes.min_persistence.text().c_str(), r.chokes.min_persistence_handle,
               r.chokes.min_persistence_tunnel);
-  std::printf("time: levelset %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, report %.0f ms, total %.0f ms\n",
+  std::printf("time: levelset %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, check %.0f ms, report %.0f ms, total %.0f ms\n",
               r.timings_ms["levelset"], r.timings_ms["persistence"], r.timings_ms["surface"], r.timings_ms["loops"],
-              report_ms, r.timings_ms["total"] + report_ms);
+              r.timings_ms["check"], report_ms, r.timings_ms["total"] + report_ms);
   std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json%s}%s%s\n", outdir.c_str(), view ? ",view.html" : "",
               png.empty() ? "" : " and ", png.c_str());
   return 0;

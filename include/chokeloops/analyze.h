@@ -18,6 +18,7 @@ struct AnalyzeOptions {
   bool resolution_auto = false;  // find the coarsest resolution whose surface keeps a closed input's genus
   ChokeParameters chokes;
   LoopOptions loops;
+  bool check_generators = true;  // verify each generator loop is non-contractible (CGAL); drop it if not
 };
 
 struct AnalyzeResult {
