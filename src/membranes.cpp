@@ -73,7 +73,7 @@ class LoopTracer {
       if (best.points.size() >= 3) loop.points = best.points;
       loop.edge_path = best.edge_path;
     } else {
-      loop.edge_path = snap_polyline_to_edge_path(S_, raw);
+      loop.edge_path = snap_polyline_to_edge_path(S_, A_, raw);
     }
     describe(loop);
     return loop;
@@ -86,7 +86,6 @@ class LoopTracer {
   void slide_to_narrowest(ShortenResult& best, const ShortenOptions& so, double reach) const {
     Loop probe;
     probe.points = best.points;
-    describe(probe);
     // Small steps from the current best, repeated while they help, follow a tube that bends.
     double travelled = 0;
     for (int round = 0; round < 6 && travelled < reach; ++round) {
@@ -172,11 +171,6 @@ class LoopTracer {
     loop.normal = {n[0], n[1], n[2]};
     loop.radius_min = rmin;
     loop.radius_mean = rsum / double(P.size());
-  }
-
-  int surface_vertex_on(Id edge) const {
-    auto it = std::lower_bound(S_.vertex_edge.begin(), S_.vertex_edge.end(), edge);
-    return (it != S_.vertex_edge.end() && *it == edge) ? int(it - S_.vertex_edge.begin()) : -1;
   }
 
   Attempt try_box(const Choke& c, int r, int seed_radius, Polyline3& out) const {
@@ -296,7 +290,7 @@ class LoopTracer {
         if (!cx_.neighbor_inside(gp, nb)) continue;
         Id u = x.v + cx_.neighbor_delta(nb);
         if (region(u)) continue;
-        int sv = surface_vertex_on(cx_.edge_id(x.v, u));
+        int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
         if (sv >= 0) vertex_label[sv] = label[x.li];
       }
     }
