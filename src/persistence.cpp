@@ -230,7 +230,6 @@ class Engine {
       std::sort(low.begin(), low.begin() + comps.count, [this](Id a, Id b) { return less(a, b); });
       for (int c = 1; c < comps.count; ++c) {
         std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
-        Id edge = cx_.edge_id(s, low[c]);
         if (r == rs) {
           birth_slots_[s] |= std::uint16_t(1u << slot(s, low[c]));
           ++births1_;
@@ -238,6 +237,7 @@ class Engine {
         }
         std::uint32_t young = less(r, rs) ? rs : r, old = young == r ? rs : r;
         desc_[young] = old;
+        Id edge = cx_.edge_id(s, low[c]);
         PersistencePair p;
         p.dim = 0;
         p.birth = f_[young];
