@@ -13,16 +13,22 @@
 //    split saddles, in reverse order, replay their lower star's tetrahedra and triangles locally.
 //  * dim 1: the edges left by dim 0 and the triangles left by dim 2 are paired by reducing only the
 //    boundaries of those triangles; a pivot edge paired inside its own lower star is replaced by the rest
-//    of that pair's cone (a path in the lower link), negative edges are compressed away.
-// Everything but the dim-1 reduction runs in parallel; every step is deterministic.
+//    of that pair's cone (a path in the lower link), negative edges are compressed away. That needs no
+//    other column until the first birth edge becomes the pivot, so every death triangle gets that far in
+//    parallel (DMS-style); only the ~15% of columns whose pivot is already owned continue sequentially.
+// Everything but that sequential remainder of dim 1 and the union-find merges runs in parallel; every step
+// is deterministic.
 #include "chokeloops/persistence.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/concurrent_vector.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <atomic>
+#include <iterator>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -49,10 +55,16 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 inline std::uint32_t load(const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); }
 inline void store(std::uint32_t& x, std::uint32_t v) { __atomic_store_n(&x, v, __ATOMIC_RELAXED); }
 
+// An edge with its vertices' values inline, so that ordering a heap of edges reads no field memory.
 struct EdgeKey {
-  Id hi, lo;
+  float fhi, flo;
+  std::uint32_t hi, lo;
   bool operator==(const EdgeKey& o) const { return hi == o.hi && lo == o.lo; }
 };
+inline bool edge_less(const EdgeKey& a, const EdgeKey& b) {
+  if (a.hi != b.hi) return a.fhi < b.fhi || (a.fhi == b.fhi && a.hi < b.hi);
+  return a.lo != b.lo && (a.flo < b.flo || (a.flo == b.flo && a.lo < b.lo));
+}
 
 // What a lower-star reduction of vertex v's lower link says about the edges (v, x): x is the root of its
 // lower-link component (a cross edge), or x died in the link's dim-0 persistence when `killer` joined it
@@ -62,8 +74,10 @@ struct LowerLinkInfo {
   std::int8_t lowest = -1;                 // neighbour slot of the lowest lower neighbour
   std::array<std::int8_t, 14> killer{};    // link edge index that killed slot n, or -1 for a root
   std::array<std::int8_t, 14> older{};     // the older root it merged into
-  std::uint16_t births = 0;                // roots x whose cross edge (v, x) gives birth to a 1-cycle
 };
+
+// A join saddle's link slots whose edges give birth to 1-cycles; base: the rank of its first such edge.
+struct BirthSlots { std::uint32_t saddle; std::uint16_t mask; std::uint32_t base; };
 
 class Engine {
  public:
@@ -74,6 +88,10 @@ class Engine {
       delta_[n] = cx_.neighbor_delta(n);
       auto o = freudenthal::neighbor_offset(n);
       slot_of_offset_[(o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = std::int8_t(n);
+    }
+    for (int e = 0; e < 36; ++e) {
+      link_edge_index_[link_.edges[e][0]][link_.edges[e][1]] = std::int8_t(e);
+      link_edge_index_[link_.edges[e][1]][link_.edges[e][0]] = std::int8_t(e);
     }
   }
 
@@ -125,15 +143,13 @@ class Engine {
       if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
     }
   }
-  // Rank (0 = lowest) of each in-box link slot of v among its lower neighbours; -1 for the others.
-  void lower_ranks(Id v, std::uint16_t lower, std::array<std::int8_t, 14>& rank) const {
-    std::array<int, 14> order;
+  // The lower link slots of v from lowest to highest; returns how many.
+  int lower_slots_in_order(Id v, std::uint16_t lower, std::array<int, 14>& order) const {
     int n = 0;
     for (unsigned m = lower; m; m &= m - 1) order[n++] = __builtin_ctz(m);
     for (int i = 1; i < n; ++i)
       for (int j = i; j > 0 && less(v + delta_[order[j]], v + delta_[order[j - 1]]); --j) std::swap(order[j], order[j - 1]);
-    rank.fill(-1);
-    for (int i = 0; i < n; ++i) rank[order[i]] = std::int8_t(i);
+    return n;
   }
   int slot(Id v, Id x) const {
     auto a = cx_.coords(v), b = cx_.coords(x);
@@ -228,10 +244,11 @@ class Engine {
         low[c] = best;
       }
       std::sort(low.begin(), low.begin() + comps.count, [this](Id a, Id b) { return less(a, b); });
+      BirthSlots births{s, 0, std::uint32_t(births1_)};
       for (int c = 1; c < comps.count; ++c) {
         std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
         if (r == rs) {
-          birth_slots_[s] |= std::uint16_t(1u << slot(s, low[c]));
+          births.mask |= std::uint16_t(1u << slot(s, low[c]));
           ++births1_;
           continue;
         }
@@ -248,6 +265,30 @@ class Engine {
         p.death_lobes = {low[0], low[c]};
         out.pairs.push_back(p);
       }
+      if (births.mask) birth_list_.push_back(births);
+    }
+    index_birth_list();
+  }
+
+  // An open-addressing table from join saddle to its entry in birth_list_: one cache miss per lookup.
+  void index_birth_list() {
+    std::size_t cap = 16;
+    while (cap < 2 * birth_list_.size()) cap *= 2;
+    birth_table_.assign(cap, kOutside);
+    for (std::uint32_t i = 0; i < birth_list_.size(); ++i) {
+      std::size_t h = hash_vertex(birth_list_[i].saddle);
+      while (birth_table_[h] != kOutside) h = (h + 1) & (cap - 1);
+      birth_table_[h] = i;
+    }
+  }
+  std::size_t hash_vertex(std::uint32_t v) const {
+    return (std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> 32) & (birth_table_.size() - 1);
+  }
+  const BirthSlots* birth_slots(Id s) const {
+    for (std::size_t h = hash_vertex(std::uint32_t(s));; h = (h + 1) & (birth_table_.size() - 1)) {
+      std::uint32_t i = birth_table_[h];
+      if (i == kOutside) return nullptr;
+      if (birth_list_[i].saddle == std::uint32_t(s)) return &birth_list_[i];
     }
   }
 
@@ -283,28 +324,10 @@ class Engine {
       unsigned in_box = ucomps.masks[c] & ~outside;
       lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
     }
-    std::array<std::int8_t, 14> rank;
-    lower_ranks(s, lower, rank);
-    // Items keyed by the descending local ranks of their lower vertices; a face (prefix) sorts first.
-    struct Item { std::uint32_t key; int index; bool tet; };
-    std::array<Item, 60> items;
-    int ni = 0;
-    for (int t = 0; t < 24; ++t) {
-      auto& tr = link_.triangles[t];
-      if ((lower >> tr[0] & 1) && (lower >> tr[1] & 1) && (lower >> tr[2] & 1)) {
-        std::array<int, 3> r{rank[tr[0]], rank[tr[1]], rank[tr[2]]};
-        std::sort(r.begin(), r.end(), std::greater<int>());
-        items[ni++] = {std::uint32_t(((r[0] + 1) << 10) | ((r[1] + 1) << 5) | (r[2] + 1)), t, true};
-      }
-    }
-    for (int e = 0; e < 36; ++e) {
-      auto& ed = link_.edges[e];
-      if ((lower >> ed[0] & 1) && (lower >> ed[1] & 1)) {
-        int hi = std::max(rank[ed[0]], rank[ed[1]]), lo = std::min(rank[ed[0]], rank[ed[1]]);
-        items[ni++] = {std::uint32_t(((hi + 1) << 10) | ((lo + 1) << 5)), e, false};
-      }
-    }
-    std::sort(items.begin(), items.begin() + ni, [](const Item& a, const Item& b) { return a.key > b.key; });
+    // Only the star's triangles (link edges) can join nodes: a tetrahedron is born as its own node. In reverse
+    // filtration order they are (order[i], order[j]) for i descending, then j < i descending.
+    std::array<int, 14> order;
+    const int n_lower = lower_slots_in_order(s, lower, order);
     std::array<int, 31> parent;
     std::array<int, 31> comp_rep;  // for a root holding an upper component: that component, else -1
     for (int n = 0; n < 31; ++n) { parent[n] = n; comp_rep[n] = n >= 24 ? n - 24 : -1; }
@@ -315,18 +338,19 @@ class Engine {
       return tri;
     };
     auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
-    for (int i = 0; i < ni; ++i) {
-      const Item& it = items[i];
-      if (it.tet) continue;  // a tetrahedron is born as its own node
-      const auto& et = link_.edge_triangles[it.index];
-      int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
-      if (r1 == r2) continue;
-      if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
-        out.push_back({s, std::uint8_t(link_.edges[it.index][0]), std::uint8_t(link_.edges[it.index][1]),
-                       rep[comp_rep[r1]], rep[comp_rep[r2]], lobe[comp_rep[r1]], lobe[comp_rep[r2]]});
-      parent[r2] = r1;
-      if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
-    }
+    for (int i = n_lower - 1; i > 0; --i)
+      for (int j = i - 1; j >= 0; --j) {
+        if (!(link_.adjacency[order[i]] >> order[j] & 1)) continue;
+        const int e = link_edge_index_[order[i]][order[j]];
+        const auto& et = link_.edge_triangles[e];
+        int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
+        if (r1 == r2) continue;
+        if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
+          out.push_back({s, std::uint8_t(link_.edges[e][0]), std::uint8_t(link_.edges[e][1]), rep[comp_rep[r1]],
+                         rep[comp_rep[r2]], lobe[comp_rep[r1]], lobe[comp_rep[r2]]});
+        parent[r2] = r1;
+        if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
+      }
   }
 
   void dim2(PersistenceDiagram& out) {
@@ -364,50 +388,50 @@ class Engine {
   }
   std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
 
+  // Thread-safe memo: the first thread to publish an index wins; a loser's copy is identical and unused.
   const LowerLinkInfo& lower_link(Id v) {
-    std::uint32_t& slot_index = link_index_[v];
-    if (slot_index != kOutside) return link_infos_[slot_index];
+    std::uint32_t index = __atomic_load_n(&link_index_[v], __ATOMIC_ACQUIRE);
+    if (index != kOutside) return link_infos_[index];
     LowerLinkInfo info;
     std::uint16_t outside;
     masks(v, info.lower, outside);
     info.killer.fill(-1);
     info.older.fill(-1);
+    // Link edges in filtration order are (order[i], order[j]) for i ascending, then j < i ascending.
+    std::array<int, 14> order;
+    const int n_lower = lower_slots_in_order(v, info.lower, order);
     std::array<std::int8_t, 14> rank;
-    lower_ranks(v, info.lower, rank);
-    std::array<std::pair<int, int>, 36> edges;  // (key from local ranks, link edge)
-    int ne = 0;
-    for (int e = 0; e < 36; ++e) {
-      int a = link_.edges[e][0], b = link_.edges[e][1];
-      if ((info.lower >> a & 1) && (info.lower >> b & 1))
-        edges[ne++] = {(std::max(rank[a], rank[b]) << 4) | std::min(rank[a], rank[b]), e};
-    }
-    std::sort(edges.begin(), edges.begin() + ne);
+    for (int i = 0; i < n_lower; ++i) rank[order[i]] = std::int8_t(i);
     std::array<int, 14> parent;
     for (int n = 0; n < 14; ++n) parent[n] = n;
     auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
-    for (int i = 0; i < ne; ++i) {
-      int e = edges[i].second;
-      int a = lfind(link_.edges[e][0]), b = lfind(link_.edges[e][1]);
-      if (a == b) continue;
-      bool a_younger = rank[a] > rank[b];
-      int young = a_younger ? a : b, old = a_younger ? b : a;
-      parent[young] = old;
-      info.killer[young] = std::int8_t(e);
-      info.older[young] = std::int8_t(old);
+    for (int i = 1; i < n_lower; ++i) {
+      const int a = order[i];
+      const unsigned adjacent = link_.adjacency[a];
+      for (int j = 0; j < i; ++j) {
+        const int b = order[j];
+        if (!(adjacent >> b & 1)) continue;
+        int ra = lfind(a), rb = lfind(b);
+        if (ra == rb) continue;
+        bool a_younger = rank[ra] > rank[rb];
+        int young = a_younger ? ra : rb, old = a_younger ? rb : ra;
+        parent[young] = old;
+        info.killer[young] = link_edge_index_[a][b];
+        info.older[young] = std::int8_t(old);
+      }
     }
-    for (int n = 0; n < 14; ++n)
-      if (rank[n] == 0) info.lowest = std::int8_t(n);
-    auto births = birth_slots_.find(v);
-    if (births != birth_slots_.end()) info.births = births->second;
-    slot_index = std::uint32_t(link_infos_.size());
-    link_infos_.push_back(info);
-    return link_infos_.back();
+    if (n_lower) info.lowest = std::int8_t(order[0]);
+    auto it = link_infos_.push_back(info);
+    std::uint32_t mine = std::uint32_t(it - link_infos_.begin()), expected = kOutside;
+    if (__atomic_compare_exchange_n(&link_index_[v], &expected, mine, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
+      return *it;
+    return link_infos_[expected];
   }
-  bool edge_less(const EdgeKey& a, const EdgeKey& b) const {
-    if (a.hi != b.hi) return less(a.hi, b.hi);
-    return a.lo != b.lo && less(a.lo, b.lo);
+  EdgeKey make_edge(Id a, Id b) const {
+    float fa = f_[a], fb = f_[b];
+    bool a_lower = fa < fb || (fa == fb && a < b);
+    return a_lower ? EdgeKey{fb, fa, std::uint32_t(b), std::uint32_t(a)} : EdgeKey{fa, fb, std::uint32_t(a), std::uint32_t(b)};
   }
-  EdgeKey make_edge(Id a, Id b) const { return less(a, b) ? EdgeKey{b, a} : EdgeKey{a, b}; }
 
   // Replaces the pivot (v, x), paired inside v's lower star, by the rest of that pair's cone: the edge
   // (v, older root) and a lower-link path from x to that root through edges no later than the killer.
@@ -436,70 +460,120 @@ class Engine {
     for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
   }
 
+  // Rank of birth edge (s, x) among all dim-1 birth edges in filtration order: the saddles' order, then
+  // each saddle's lower ends in order.
+  std::uint32_t birth_rank(Id s, Id x) const {
+    const BirthSlots* b = birth_slots(s);
+    std::uint32_t r = b->base;
+    for (unsigned m = b->mask; m; m &= m - 1)
+      if (less(s + delta_[__builtin_ctz(m)], x)) ++r;
+    return r;
+  }
+  bool is_birth_edge(Id s, int slot_of_x) const {
+    const BirthSlots* b = birth_slots(s);
+    return b && (b->mask >> slot_of_x & 1);
+  }
+
+  // Pops the chain's edges from the top until one is a dim-1 birth edge, which is returned (popped): an edge
+  // paired inside its own lower star is replaced by the rest of that pair's cone (this adds a boundary, so
+  // the pivot is the one the full boundary matrix gives); a negative edge is dropped (compression).
+  template <class Heap>
+  bool pop_to_birth_pivot(Heap& heap, EdgeKey& p) {
+    while (!heap.empty()) {
+      p = heap.top();
+      heap.pop();
+      bool odd = true;
+      while (!heap.empty() && heap.top() == p) { heap.pop(); odd = !odd; }
+      if (!odd) continue;
+      const LowerLinkInfo& info = lower_link(p.hi);
+      int x = slot(p.hi, p.lo);
+      if (info.killer[x] >= 0) {
+        expand_local_pair(p.hi, info, x, [&](const EdgeKey& e) { heap.push(e); });
+        continue;
+      }
+      // A root's edge is negative (it attaches p.hi, or merges two components) unless dim 0 left it as a
+      // birth; the lowest root's edge always attaches. Negative edges are compressed away.
+      if (x != info.lowest && is_birth_edge(p.hi, x)) return true;
+    }
+    return false;
+  }
+  // Appends the pivot and the rest of the chain, descending, cancelling pairs.
+  template <class Heap>
+  static void drain(Heap& heap, const EdgeKey& pivot, std::vector<EdgeKey>& out) {
+    out.push_back(pivot);
+    while (!heap.empty()) {
+      EdgeKey q = heap.top();
+      heap.pop();
+      bool odd = true;
+      while (!heap.empty() && heap.top() == q) { heap.pop(); odd = !odd; }
+      if (odd) out.push_back(q);
+    }
+  }
+
   void dim1(PersistenceDiagram& out) {
     if (births1_ != deaths1_.size())
       throw std::logic_error("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                              std::to_string(deaths1_.size()) + ")");
     link_index_.assign(V_, kOutside);
     auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
-    std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)> heap(heap_less);
-    std::unordered_map<Id, std::uint32_t> owner;  // birth edge id -> reduced column
-    std::vector<EdgeKey> column_entries;  // reduced columns of paired death triangles, back to back
-    std::vector<std::size_t> column_start{0};
-    std::size_t done = 0;
-    for (const auto& death : deaths1_) {
-      const auto& tau = death.v;
-      if ((++done & 1023) == 0) report("dim 1", 0.6 + 0.4 * double(done) / double(deaths1_.size()));
-      heap.push(make_edge(tau[0], tau[1]));
-      heap.push(make_edge(tau[0], tau[2]));
-      heap.push(make_edge(tau[1], tau[2]));
-      bool paired = false;
-      while (!heap.empty()) {
-        EdgeKey p = heap.top();
-        heap.pop();
-        bool odd = true;
-        while (!heap.empty() && heap.top() == p) { heap.pop(); odd = !odd; }
-        if (!odd) continue;
-        const LowerLinkInfo& info = lower_link(p.hi);
-        int x = slot(p.hi, p.lo);
-        if (info.killer[x] >= 0) {
-          expand_local_pair(p.hi, info, x, [&](const EdgeKey& e) { heap.push(e); });
-          continue;
+    using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)>;
+    // In parallel: each death triangle's boundary up to its first birth pivot, which needs no other column.
+    // Most columns end there (their pivot is not owned yet); the rest continue below in filtration order.
+    struct Columns { std::vector<EdgeKey> entries; std::vector<std::uint32_t> start{0}; };
+    const std::size_t chunk = 2048, nchunks = (deaths1_.size() + chunk - 1) / chunk;
+    std::vector<Columns> first(nchunks);
+    tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+      Heap heap(heap_less);
+      Columns& cols = first[c];
+      for (std::size_t i = c * chunk; i < std::min(deaths1_.size(), (c + 1) * chunk); ++i) {
+        const auto& tau = deaths1_[i].v;
+        heap.push(make_edge(tau[0], tau[1]));
+        heap.push(make_edge(tau[0], tau[2]));
+        heap.push(make_edge(tau[1], tau[2]));
+        EdgeKey p;
+        if (pop_to_birth_pivot(heap, p)) drain(heap, p, cols.entries);
+        cols.start.push_back(std::uint32_t(cols.entries.size()));
+      }
+    });
+    report("dim 1", 0.8);
+    // In filtration order: a column whose pivot is owned adds the owner's column and goes on reducing.
+    struct Span { const EdgeKey* begin; const EdgeKey* end; };
+    std::vector<Span> owner(births1_, Span{nullptr, nullptr});
+    std::deque<std::vector<EdgeKey>> continued;  // columns that needed additions (stable addresses)
+    Heap heap(heap_less);
+    for (std::size_t c = 0, i = 0; c < nchunks; ++c) {
+      const Columns& cols = first[c];
+      for (std::size_t k = 0; k + 1 < cols.start.size(); ++k, ++i) {
+        if (cols.start[k] == cols.start[k + 1]) throw std::logic_error("a dim-1 death triangle reduced to zero");
+        Span column{cols.entries.data() + cols.start[k], cols.entries.data() + cols.start[k + 1]};
+        EdgeKey p = *column.begin;
+        std::uint32_t r = birth_rank(p.hi, p.lo);
+        if (owner[r].begin) {
+          for (const EdgeKey* e = column.begin + 1; e != column.end; ++e) heap.push(*e);
+          for (;;) {
+            for (const EdgeKey* e = owner[r].begin + 1; e != owner[r].end; ++e) heap.push(*e);
+            if (!pop_to_birth_pivot(heap, p)) throw std::logic_error("a dim-1 death triangle reduced to zero");
+            r = birth_rank(p.hi, p.lo);
+            if (!owner[r].begin) break;
+          }
+          continued.emplace_back();
+          drain(heap, p, continued.back());
+          column = {continued.back().data(), continued.back().data() + continued.back().size()};
         }
-        // A root's edge is negative (it attaches p.hi, or merges two components): compressed away.
-        if (!(info.births >> x & 1)) continue;
-        Id eid = cx_.edge_id(p.hi, p.lo);
-        auto own = owner.find(eid);
-        if (own != owner.end()) {
-          for (std::size_t i = column_start[own->second]; i < column_start[own->second + 1]; ++i)
-            if (!(column_entries[i] == p)) heap.push(column_entries[i]);
-          continue;
-        }
-        owner.emplace(eid, std::uint32_t(column_start.size() - 1));
-        column_entries.push_back(p);
-        while (!heap.empty()) {
-          EdgeKey q = heap.top();
-          heap.pop();
-          bool q_odd = true;
-          while (!heap.empty() && heap.top() == q) { heap.pop(); q_odd = !q_odd; }
-          if (q_odd) column_entries.push_back(q);
-        }
-        column_start.push_back(column_entries.size());
+        owner[r] = column;
+        const auto& tau = deaths1_[i].v;
         PersistencePair pr;
         pr.dim = 1;
         pr.birth = f_[p.hi];
         pr.death = f_[tau[0]];
-        pr.birth_simplex = eid;
+        pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
         pr.birth_vertex = p.hi;
         pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
         pr.death_vertex = tau[0];
-        pr.birth_lobes = {p.hi + delta_[info.lowest], p.lo};
-        pr.death_lobes = death.lobes;
+        pr.birth_lobes = {p.hi + delta_[lower_link(p.hi).lowest], p.lo};
+        pr.death_lobes = deaths1_[i].lobes;
         out.pairs.push_back(pr);
-        paired = true;
-        break;
       }
-      if (!paired) throw std::logic_error("a dim-1 death triangle reduced to zero");
     }
   }
 
@@ -527,14 +601,16 @@ class Engine {
   const freudenthal::Link& link_;
   std::array<Id, 14> delta_{};
   std::array<std::int8_t, 27> slot_of_offset_{};
+  std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
   std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
   Id minima_ = 0, maxima_ = 0;
-  std::unordered_map<Id, std::uint16_t> birth_slots_;  // join saddle -> link slots of its dim-1 birth edges
+  std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
+  std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
   std::size_t births1_ = 0;
   struct Death1 { std::array<Id, 3> v; std::array<Id, 2> lobes; };  // v: highest to lowest vertex
   std::vector<Death1> deaths1_;
   std::vector<std::uint32_t> link_index_;  // per vertex: index into link_infos_, or kOutside if not computed
-  std::deque<LowerLinkInfo> link_infos_;
+  tbb::concurrent_vector<LowerLinkInfo> link_infos_;
 };
 
 }  // namespace
