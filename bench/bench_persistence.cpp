@@ -6,9 +6,12 @@
 // (fork), so the peak RSS printed (getrusage ru_maxrss) is that configuration's: it includes the
 // input field (4 bytes per vertex) and the diagram. Times are medians over --runs runs (default 5)
 // of each phase (PersistenceDiagram::stats) and of the whole lower_star_persistence call.
+// --peer-phat MAX_N also runs the peer on every size up to MAX_N, in the same run on the same field:
+// PHAT's twist reduction of the explicit boundary matrix (tests/phat_oracle.h), with its time, peak RSS,
+// the ratio to chokeloops' wall time, and a check that both give the same number of pairs.
 //
 // usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random]
-//                          [--threads N]
+//                          [--threads N] [--peer-phat MAX_N]
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,6 +31,7 @@
 
 #include "chokeloops/analytic.h"
 #include "chokeloops/persistence.h"
+#include "../tests/phat_oracle.h"
 
 using namespace chokeloops;
 
@@ -65,12 +69,31 @@ const char* field_label(const std::string& name) {
   return name.c_str();
 }
 
-Result measure(const std::string& field, int n, int runs) {
+// The peer: PHAT's twist reduction of the explicit boundary matrix of the same filtered complex (the
+// oracle of the tests), timed from the field to the pairs. Single-threaded, as PHAT's twist is.
+void measure_phat(const ScalarGrid& g, int runs, Result& r) {
+  std::vector<double> wall;
+  for (int i = 0; i < runs; ++i) {
+    auto s = std::chrono::steady_clock::now();
+    oracle::OracleDiagram d = oracle::phat_persistence(g);
+    wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - s).count());
+    for (int k = 0; k < 3; ++k) r.pairs[k] = 0;
+    for (auto& p : d.pairs) if (p.dim < 3) ++r.pairs[p.dim];
+    r.essential = (long long)d.essential.size();
+  }
+  r.total = r.wall = median(wall);
+}
+
+Result measure(const std::string& field, int n, int runs, bool phat) {
   Result r;
   auto t0 = std::chrono::steady_clock::now();
   ScalarGrid g = make_field(field, n);
   r.make_field = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<double> cl, d0, d2, d1, tot, wall;
+  if (phat) {
+    measure_phat(g, runs, r);
+    runs = 0;
+  }
   for (int i = 0; i < runs; ++i) {
     auto s = std::chrono::steady_clock::now();
     PersistenceDiagram d = lower_star_persistence(g);
@@ -87,12 +110,14 @@ Result measure(const std::string& field, int n, int runs) {
     r.minima = d.stats.minima;
     r.maxima = d.stats.maxima;
   }
-  r.classify = median(cl);
-  r.dim0 = median(d0);
-  r.dim2 = median(d2);
-  r.dim1 = median(d1);
-  r.total = median(tot);
-  r.wall = median(wall);
+  if (!phat) {
+    r.classify = median(cl);
+    r.dim0 = median(d0);
+    r.dim2 = median(d2);
+    r.dim1 = median(d1);
+    r.total = median(tot);
+    r.wall = median(wall);
+  }
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
   r.peak_rss_mb = double(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
@@ -101,7 +126,7 @@ Result measure(const std::string& field, int n, int runs) {
 }
 
 // Runs `measure` in a child process and returns its result through a pipe.
-Result measure_in_child(const std::string& field, int n, int runs, int threads) {
+Result measure_in_child(const std::string& field, int n, int runs, int threads, bool phat = false) {
   int fd[2];
   if (pipe(fd) != 0) {
     std::perror("pipe");
@@ -120,7 +145,7 @@ Result measure_in_child(const std::string& field, int n, int runs, int threads) 
       std::unique_ptr<tbb::global_control> limit;
       if (threads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
-      r = measure(field, n, runs);
+      r = measure(field, n, runs, phat);
     } catch (const std::exception& e) {
       std::snprintf(r.error, sizeof r.error, "%s", e.what());
     }
@@ -159,7 +184,7 @@ std::vector<std::string> split(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int runs = 5, threads = 0;
+  int runs = 5, threads = 0, peer_max = 0;
   bool large = false;
   std::vector<int> sizes{128, 256};
   std::vector<std::string> fields{"torus", "noise", "random"};
@@ -174,6 +199,7 @@ int main(int argc, char** argv) {
     };
     if (a == "--runs") runs = std::max(1, std::atoi(value().c_str()));
     else if (a == "--large") large = true;
+    else if (a == "--peer-phat") peer_max = std::atoi(value().c_str());
     else if (a == "--threads") threads = std::atoi(value().c_str());
     else if (a == "--sizes") {
       sizes.clear();
@@ -182,7 +208,7 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random] "
-                   "[--threads N]\n");
+                   "[--threads N] [--peer-phat MAX_N]\n");
       return a == "-h" || a == "--help" ? 0 : 2;
     }
   }
@@ -206,6 +232,20 @@ int main(int argc, char** argv) {
         std::printf("| %s | %d^3 | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %lld | %lld | %lld | %lld | %lld | %.0f |\n",
                     field_label(f), n, r.classify, r.dim0, r.dim2, r.dim1, r.total, r.wall, r.pairs[0], r.pairs[1],
                     r.pairs[2], r.join_saddles, r.split_saddles, r.peak_rss_mb);
+      }
+      std::fflush(stdout);
+      if (n > peer_max || !r.ok) continue;
+      Result p = measure_in_child(f, n, std::min(runs, 3), threads, true);
+      if (!p.ok) {
+        std::printf("| PHAT twist, explicit complex | %d^3 | failed: %s |\n", n, p.error);
+        ++failures;
+        continue;
+      }
+      std::printf("| PHAT twist, explicit complex: %s | %d^3 | | | | | %.3f | %.3f (%.0fx chokeloops) | %lld | %lld | %lld | | | %.0f |\n",
+                  field_label(f), n, p.total, p.wall, p.wall / r.wall, p.pairs[0], p.pairs[1], p.pairs[2], p.peak_rss_mb);
+      if (p.pairs[0] != r.pairs[0] || p.pairs[1] != r.pairs[1] || p.pairs[2] != r.pairs[2]) {
+        std::printf("  pair counts differ from chokeloops'\n");
+        ++failures;
       }
       std::fflush(stdout);
     }
