@@ -7,8 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -30,10 +32,14 @@ double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 
 struct SurfaceTopology::Impl {
   const SurfaceMesh& mesh;
-  MeshAdjacency adj;
+  MeshAdjacency own;
+  const MeshAdjacency& adj;
   std::vector<int> face_label;
   std::vector<int> vertex_label;
   int components = 0;
+  std::vector<std::int64_t> euler;  // per component: V - E + F
+  std::vector<char> closed;         // per component: every edge has two faces
+  std::mutex cgal_lock;
   struct Component {
     std::unique_ptr<SM> sm;
     std::unique_ptr<CST> cst;
@@ -41,11 +47,25 @@ struct SurfaceTopology::Impl {
   };
   std::map<int, Component> comps;
 
-  explicit Impl(const SurfaceMesh& m) : mesh(m), adj(build_adjacency(m)) {
+  Impl(const SurfaceMesh& m, const MeshAdjacency* a) : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
     components = face_components(m, face_label);
     vertex_label.assign(m.vertices.size(), -1);
     for (size_t f = 0; f < m.faces.size(); ++f)
       for (int k = 0; k < 3; ++k) vertex_label[m.faces[f][k]] = face_label[f];
+    euler.assign(size_t(std::max(components, 0)), 0);
+    closed.assign(size_t(std::max(components, 0)), 1);
+    for (size_t v = 0; v < m.vertices.size(); ++v)
+      if (vertex_label[v] >= 0) ++euler[vertex_label[v]];
+    std::vector<std::int64_t> edges(euler.size(), 0), faces(euler.size(), 0);
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      ++faces[face_label[f]];
+      for (int k = 0; k < 3; ++k) {
+        int h = int(3 * f + k), t = adj.twin[h];
+        if (t < 0) closed[face_label[f]] = 0;
+        if (t < 0 || h < t) ++edges[face_label[f]];
+      }
+    }
+    for (size_t c = 0; c < euler.size(); ++c) euler[c] += faces[c] - edges[c];
   }
 
   void check(const std::vector<int>& loop) const {
@@ -84,7 +104,9 @@ struct SurfaceTopology::Impl {
   }
 };
 
-SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh) : impl_(std::make_unique<Impl>(mesh)) {}
+SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh) : impl_(std::make_unique<Impl>(mesh, nullptr)) {}
+SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency)
+    : impl_(std::make_unique<Impl>(mesh, &adjacency)) {}
 SurfaceTopology::~SurfaceTopology() = default;
 
 int SurfaceTopology::component_of_vertex(int v) const { return impl_->vertex_label.at(size_t(v)); }
@@ -92,6 +114,7 @@ int SurfaceTopology::component_of_vertex(int v) const { return impl_->vertex_lab
 bool SurfaceTopology::contractible(const std::vector<int>& loop) {
   impl_->check(loop);
   if (loop.size() < 3) return true;  // a point or an edge traversed back and forth
+  std::lock_guard<std::mutex> hold(impl_->cgal_lock);
   auto& C = impl_->component(impl_->vertex_label[loop[0]]);
   Path p(*C.sm);
   for (size_t i = 0; i < loop.size(); ++i) {
@@ -103,6 +126,58 @@ bool SurfaceTopology::contractible(const std::vector<int>& loop) {
   p.update_is_closed();
   if (!p.is_closed()) throw Error("loop is not closed");
   return C.cst->is_contractible(p);
+}
+
+bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
+  impl_->check(loop);
+  if (loop.size() < 3) return true;
+  const auto& mesh = impl_->mesh;
+  const auto& adj = impl_->adj;
+  const int c = impl_->vertex_label[loop[0]];
+  if (c < 0 || !impl_->closed[c] || !loop_is_simple(loop)) return contractible(loop);
+  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_set<std::uint64_t> cut;
+  std::vector<char> on_loop(mesh.vertices.size(), 0);  // spares most edges the hash look-up
+  for (size_t i = 0; i < loop.size(); ++i) {
+    cut.insert(key(loop[i], loop[(i + 1) % loop.size()]));
+    on_loop[loop[i]] = 1;
+  }
+  const int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  const int t0 = h0 < 0 ? -1 : adj.twin[h0];
+  if (t0 < 0) return contractible(loop);
+  // side[f]: 0 unseen, 1 or 2 the side of the loop whose flood reached f first.
+  std::vector<char> side(mesh.faces.size(), 0);
+  std::array<std::vector<int>, 2> queue{std::vector<int>{MeshAdjacency::face(h0)}, std::vector<int>{MeshAdjacency::face(t0)}};
+  std::array<std::size_t, 2> head{0, 0};
+  side[queue[0][0]] = 1;
+  side[queue[1][0]] = 2;
+  int done = -1;
+  while (done < 0) {
+    for (int s = 0; s < 2 && done < 0; ++s) {
+      if (head[s] == queue[s].size()) { done = s; break; }
+      int f = queue[s][head[s]++];
+      for (int k = 0; k < 3; ++k) {
+        int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+        if (on_loop[a] && on_loop[b] && cut.count(key(a, b))) continue;
+        int g = MeshAdjacency::face(adj.twin[3 * f + k]);
+        if (side[g] == 0) { side[g] = char(s + 1); queue[s].push_back(g); }
+        else if (side[g] != s + 1) return false;  // both sides are one: the loop does not separate
+      }
+    }
+  }
+  // The loop separates; side `done` is complete. Its Euler characteristic (the loop's edges and vertices
+  // included once) decides whether it is a disk; the other side's is the component's minus it (the loop,
+  // a circle, has characteristic 0).
+  const auto& faces = queue[done];
+  std::vector<char> seen(mesh.vertices.size(), 0);
+  std::int64_t V = 0;
+  for (int f : faces)
+    for (int k = 0; k < 3; ++k)
+      if (!seen[mesh.faces[f][k]]) seen[mesh.faces[f][k]] = 1, ++V;
+  const std::int64_t F = std::int64_t(faces.size()), L = std::int64_t(loop.size());
+  const std::int64_t E = (3 * F + L) / 2;  // interior edges are shared by two of its faces, loop edges not
+  const std::int64_t chi = V - E + F;
+  return chi == 1 || impl_->euler[c] - chi == 1;
 }
 
 bool SurfaceTopology::separates(const std::vector<int>& loop) {

@@ -95,3 +95,43 @@ TEST(Topology, RejectsBrokenLoops) {
   EXPECT_THROW(topo.contractible({0, int(m.vertices.size())}), Error);
   EXPECT_THROW(topo.separates({0, 1, 2, 3, 4, 5, 6, 7, 8, 9}), Error);  // not consecutive along edges
 }
+
+TEST(Topology, FastContractibilityAgreesWithCgal) {
+  // Two tori (genus 2) joined by a bar along x: a circle around the bar separates the surface into two
+  // genus-1 halves, so it is essential although it separates: the case a separation test alone gets wrong.
+  auto torus_a = analytic::torus(0.12, 0.05, {0.25, 0.5, 0.5}), torus_b = analytic::torus(0.12, 0.05, {0.75, 0.5, 0.5});
+  auto shape = [&](double x, double y, double z) {
+    double bar = std::max(std::hypot(y - 0.5, z - 0.5) - 0.04, std::abs(x - 0.5) - 0.15);
+    return std::min({torus_a(x, y, z), torus_b(x, y, z), bar});
+  };
+  auto m = cube_surface(96, shape);
+  ASSERT_EQ(surface_stats(m).genus, 2);
+  SurfaceTopology topo(m);
+  auto snap = [&](Polyline3 p) { return snap_polyline_to_edge_path(m, p); };
+  struct Case { const char* name; std::vector<int> loop; bool contractible, separates; };
+  std::vector<Case> cases = {
+      {"bar", snap(circle({0.5, 0.5, 0.5}, {0, 1, 0}, {0, 0, 1}, 0.04)), false, true},
+      {"meridian", snap(circle({0.25 - 0.12, 0.5, 0.5}, {1, 0, 0}, {0, 0, 1}, 0.05)), false, false},
+      {"longitude", snap(circle({0.75, 0.5, 0.5}, {1, 0, 0}, {0, 1, 0}, 0.12 - 0.05)), false, false},
+      {"small", snap(circle({0.25 - 0.17, 0.5, 0.5}, {0, 1, 0}, {0, 0, 1}, 0.02)), true, true},
+  };
+  for (auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    ASSERT_TRUE(loop_is_simple(c.loop));
+    EXPECT_EQ(topo.contractible(c.loop), c.contractible);
+    EXPECT_EQ(topo.contractible_fast(c.loop), c.contractible);
+    EXPECT_EQ(topo.separates(c.loop), c.separates);
+  }
+  // A sphere's equator (separating, both sides disks) and a loop on a hollow ball's inner sphere.
+  auto s = cube_surface(48, analytic::ball(0.3));
+  SurfaceTopology ts(s);
+  auto eq = snap_polyline_to_edge_path(s, circle({0.5, 0.5, 0.5}, {1, 0, 0}, {0, 1, 0}, 0.3));
+  EXPECT_TRUE(ts.contractible_fast(eq));
+  // A non-simple loop (the equator twice) goes to CGAL and stays contractible there.
+  std::vector<int> twice(eq);
+  twice.insert(twice.end(), eq.begin(), eq.end());
+  EXPECT_TRUE(ts.contractible_fast(twice));
+  auto meridian_twice = cases[1].loop;
+  meridian_twice.insert(meridian_twice.end(), cases[1].loop.begin(), cases[1].loop.end());
+  EXPECT_FALSE(topo.contractible_fast(meridian_twice));
+}

@@ -13,18 +13,27 @@
 
 namespace chokeloops {
 
-// Builds the per-component structures once, for many queries on one mesh (not thread-safe: the CGAL
-// structure of a component is built lazily on its first contractibility query). Throws Error when a loop is
-// empty, uses an index out of range, or two consecutive vertices are not joined by a mesh edge.
+// Builds the per-component structures once, for many queries on one mesh. Queries may run concurrently (the
+// CGAL structure of a component is built lazily, under a lock, on its first CGAL query). Throws Error when a
+// loop is empty, uses an index out of range, or two consecutive vertices are not joined by a mesh edge.
 class SurfaceTopology {
  public:
   explicit SurfaceTopology(const SurfaceMesh& mesh);
+  // Shares a prebuilt adjacency of `mesh` (kept by reference: it must outlive this object).
+  SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
   ~SurfaceTopology();
   SurfaceTopology(const SurfaceTopology&) = delete;
   SurfaceTopology& operator=(const SurfaceTopology&) = delete;
 
   // Null-homotopic on the surface (CGAL::Surface_mesh_topology::Curves_on_surface_topology).
   bool contractible(const std::vector<int>& loop);
+  // The same answer without CGAL's structure when it can: a simple loop on a closed manifold component is
+  // contractible exactly when it bounds a disk, i.e. cutting along it separates the component and one side
+  // has Euler characteristic 1. Two face floods, one from each side of the loop and advanced in turn, decide
+  // it in time proportional to the smaller side (a separating loop) or to the part swept before they meet
+  // (a non-separating one): milliseconds where building CGAL's structure over a large surface takes
+  // seconds. Any other loop (not simple, or on a component with boundary) goes to contractible().
+  bool contractible_fast(const std::vector<int>& loop);
   // Removing the loop's edges splits the loop's component into more face-connected parts.
   bool separates(const std::vector<int>& loop);
   // Component (face_components numbering) that holds vertex v, -1 for an isolated vertex.
