@@ -1,5 +1,6 @@
 // Benchmark of the levelset stage: mesh → dense signed distance grid, wall time (median of N runs)
 // and peak RSS, for bunny, armadillo, fertility and neptune at --resolution 256 (issue 3).
+// Then, per model, each sub-stage's median time and peak RSS within it (VmHWM reset per stage).
 // usage: bench_levelset [runs=3] [resolution=256] [mesh paths...]
 #include <sys/resource.h>
 
@@ -7,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -34,32 +36,50 @@ int main(int argc, char** argv) {
     std::vector<double> times, cpu;
     LevelSetResult r;
     double prep = 0;
+    std::vector<std::string> stage_order;
+    std::map<std::string, std::vector<double>> stage_s, stage_cpu;
+    std::map<std::string, std::size_t> stage_rss;
     for (int k = 0; k < runs; ++k) {
       LevelSetOptions o;
       o.resolution = res;
       o.quiet = true;
+      o.stage_memory = true;
       const double c0 = cpu_now();
       auto t0 = std::chrono::steady_clock::now();
-      TriangleMesh m = read_mesh(f);
-      auto t1 = std::chrono::steady_clock::now();
-      r = mesh_to_levelset(m, o, f);
+      r = LevelSetResult();  // the previous run's grid must not count in this run's peak
+      r = make_levelset(f, o);
       auto t2 = std::chrono::steady_clock::now();
       times.push_back(std::chrono::duration<double>(t2 - t0).count());
       cpu.push_back(cpu_now() - c0);
-      prep = std::chrono::duration<double>(t1 - t0).count();
+      for (auto& s : r.stages) {
+        if (!stage_s.count(s.name)) stage_order.push_back(s.name);
+        stage_s[s.name].push_back(s.seconds);
+        stage_cpu[s.name].push_back(s.cpu_seconds);
+        stage_rss[s.name] = std::max(stage_rss[s.name], s.peak_rss);
+        if (s.name == "read") prep = s.seconds;
+      }
     }
     std::sort(times.begin(), times.end());
     std::sort(cpu.begin(), cpu.end());
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
+    std::size_t peak = 0;
+    for (auto& [n, b] : stage_rss) peak = std::max(peak, b);
     char grid[64];
     std::snprintf(grid, sizeof grid, "%dx%dx%d", r.grid.dims[0], r.grid.dims[1], r.grid.dims[2]);
     std::string name = f.substr(f.find_last_of('/') + 1);
     std::printf("%-24s %9zu %16s %10.3f %10.3f %12.3f %10.3f %10.0f\n", name.c_str(), r.report.input_faces, grid,
-                times[times.size() / 2], times.front(), cpu[cpu.size() / 2], prep, ru.ru_maxrss / 1024.0);
+                times[times.size() / 2], times.front(), cpu[cpu.size() / 2], prep, peak / 1048576.0);
+    for (auto& n : stage_order) {
+      auto& v = stage_s[n];
+      auto& c = stage_cpu[n];
+      std::sort(v.begin(), v.end());
+      std::sort(c.begin(), c.end());
+      std::printf("    %-32s %8.3f s %8.3f s CPU %8.0f MB peak\n", n.c_str(), v[v.size() / 2], c[c.size() / 2],
+                  stage_rss[n] / 1048576.0);
+    }
     std::fflush(stdout);
   }
   std::printf("(wall times include mesh reading; CPU = user+sys over all threads, useful when the machine is\n"
-              " shared; peak RSS is cumulative over the process: each row is the max so far)\n");
+              " shared; peak RSS: max over runs and stages of the process's peak within a stage, the VmHWM\n"
+              " being reset at each stage start, so earlier models do not count)\n");
   return 0;
 }

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <map>
 
+#include <tbb/global_control.h>
+
 #include "chokeloops/levelset.h"
 #include "chokeloops/mesh_io.h"
 
@@ -172,4 +174,24 @@ TEST(LevelSetAccuracy, VoxelSizeAndMarginOptions) {
   EXPECT_LE(res.grid.dims[0], 32);
   EXPECT_LE(res.grid.origin[0], -1.5 + 1e-9);
   EXPECT_NEAR(res.margin, 0.5, 1e-12);
+}
+
+TEST(LevelSetAccuracy, SameGridWhateverTheThreadCount) {
+  // the feature transform and its relaxation run in parallel; the grid must not depend on the split
+  TriangleMesh m = torus(1.0, 0.4, 180, 72);
+  LevelSetOptions o;
+  o.resolution = 96;
+  o.quiet = true;
+  LevelSetResult many = mesh_to_levelset(m, o, "torus");
+  LevelSetResult one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = mesh_to_levelset(m, o, "torus");
+  }
+  ASSERT_EQ(one.grid.values.size(), many.grid.values.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < one.grid.values.size(); ++i) differ += one.grid.values[i] != many.grid.values[i];
+  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(one.inside_voxels, many.inside_voxels);
+  EXPECT_GT(one.inside_voxels, 0u);
 }

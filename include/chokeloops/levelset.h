@@ -22,6 +22,15 @@ struct LevelSetOptions {
   std::string grid_name;        // .vdb input: which grid ("" = first float grid)
   bool fill_holes = true;       // close holes of open meshes with CGAL (triangulate_hole) before taking the sign
   bool keep_vdb = false;        // also build result.vdb (FloatGrid of the whole box; same as grid_from_dense(grid))
+  bool stage_memory = false;    // record each stage's peak RSS (resets the process's VmHWM: benchmarks only)
+};
+
+// Wall time and (when LevelSetOptions::stage_memory) peak resident memory of one sub-stage.
+struct LevelSetStage {
+  std::string name;            // "read", "repair", "band", "sign", "far field", ...
+  double seconds = 0;
+  double cpu_seconds = 0;      // user + system over all threads (comparable on a loaded machine)
+  std::size_t peak_rss = 0;    // bytes, process peak during this stage; 0 when not measured
 };
 
 struct LevelSetResult {
@@ -34,6 +43,7 @@ struct LevelSetResult {
   std::size_t outside_voxels = 0;       // vertices with phi >= 0
   double margin = 0;                    // padding used, input units
   double seconds = 0;                   // wall time of make_levelset
+  std::vector<LevelSetStage> stages;    // in order; CHOKELOOPS_LEVELSET_TIMING=1 also prints them
 };
 
 // Dispatches on the extension: .vdb → levelset_from_vdb, .obj/.ply/.off/.stl → read_mesh + mesh_to_levelset.
