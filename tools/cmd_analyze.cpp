@@ -1,5 +1,4 @@
 // `chokeloops analyze INPUT -o OUTDIR`: every stage, the report files, the viewer page and a summary.
-#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -9,6 +8,7 @@
 
 #include "chokeloops/analyze.h"
 #include "chokeloops/view.h"
+#include "args.h"
 #include "command.h"
 
 using namespace chokeloops;
@@ -73,58 +73,37 @@ int run(std::vector<std::string> args) {
   std::string input, outdir, png;
   bool quiet = false, view = true;
   int threads = 0;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw Error("option " + a + " needs a value (see chokeloops analyze --help)");
-      return args[++i];
-    };
-    auto number = [&](const std::string& v) {
-      char* end = nullptr;
-      double d = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end) throw Error("option " + a + ": '" + v + "' is not a number");
-      return d;
-    };
-    if (a == "-h" || a == "--help") { std::cout << kUsage; return 0; }
-    else if (a == "-o" || a == "--output") outdir = value();
-    else if (a == "--resolution") {
-      std::string v = value();
-      if (v == "auto") options.resolution_auto = true;
-      else {
-        double n = number(v);
-        if (n < 8 || n > 4096 || n != std::floor(n)) throw Error("--resolution must be an integer in [8, 4096] or auto");
-        options.levelset.resolution = int(n);
-      }
-    } else if (a == "--voxel-size") {
-      options.levelset.voxel_size = number(value());
+  cli::Args in("analyze", std::move(args));
+  while (in.next()) {
+    if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
+    else if (in.is("-o", "--output")) outdir = in.value();
+    else if (in.is("--resolution")) {
+      if (in.peek() == "auto") options.resolution_auto = in.value() == "auto";
+      else options.levelset.resolution = int(in.integer(8, 4096));
+    } else if (in.is("--voxel-size")) {
+      options.levelset.voxel_size = in.number();
       if (!(options.levelset.voxel_size > 0)) throw Error("--voxel-size must be positive");
-    } else if (a == "--margin") options.levelset.margin = number(value());
-    else if (a == "--dmax") options.chokes.d_max = Threshold::parse(value());
-    else if (a == "--min-persistence") options.chokes.min_persistence = Threshold::parse(value());
-    else if (a == "--side") {
-      std::string v = value();
+    } else if (in.is("--margin")) options.levelset.margin = in.number();
+    else if (in.is("--dmax")) options.chokes.d_max = Threshold::parse(in.value());
+    else if (in.is("--min-persistence")) options.chokes.min_persistence = Threshold::parse(in.value());
+    else if (in.is("--side")) {
+      std::string v = in.value();
       if (v != "handle" && v != "tunnel" && v != "both") throw Error("--side must be handle, tunnel or both");
       options.chokes.handles = v != "tunnel";
       options.chokes.tunnels = v != "handle";
-    } else if (a == "--threads") {
-      double n = number(value());
-      if (n < 1 || n != std::floor(n)) throw Error("--threads must be a positive integer");
-      threads = int(n);
-    } else if (a == "--max-memory") options.levelset.max_memory = parse_bytes(value());
-    else if (a == "--png") png = value();
-    else if (a == "--no-view") view = false;
-    else if (a == "--no-shorten") options.loops.shorten = false;
-    else if (a == "--no-slide") options.loops.slide = false;
-    else if (a == "--no-check") options.check_generators = false;
-    else if (a == "--quiet" || a == "-q") quiet = true;
-    else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops analyze --help)");
-    else if (input.empty()) input = a;
-    else throw Error("more than one input given ('" + input + "' and '" + a + "')");
+    } else if (in.is("--threads")) threads = in.threads();
+    else if (in.is("--max-memory")) options.levelset.max_memory = parse_bytes(in.value());
+    else if (in.is("--png")) png = in.value();
+    else if (in.is("--no-view")) view = false;
+    else if (in.is("--no-shorten")) options.loops.shorten = false;
+    else if (in.is("--no-slide")) options.loops.slide = false;
+    else if (in.is("--no-check")) options.check_generators = false;
+    else if (in.is("-q", "--quiet")) quiet = true;
+    else in.positional(input, "input");
   }
   if (input.empty()) throw Error("no input given (usage: chokeloops analyze INPUT -o OUTDIR)");
   if (outdir.empty()) throw Error("no output directory given (-o OUTDIR)");
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  auto limit = cli::limit_threads(threads);
 
   Progress progress(quiet);
   AnalyzeResult r = analyze(input, options, std::ref(progress));

@@ -1,6 +1,5 @@
 // `chokeloops levelset INPUT -o OUT.vdb`: mesh or .vdb → signed distance grid (stage levelset).
 #include <chrono>
-#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -8,6 +7,7 @@
 #include "chokeloops/grid.h"
 #include "chokeloops/levelset.h"
 #include "chokeloops/vdb_io.h"
+#include "args.h"
 #include "command.h"
 
 namespace {
@@ -36,60 +36,38 @@ const char* kUsage =
     "\n"
     "exit codes: 0 ok, 2 bad input or arguments, 3 not enough memory (the message names a --resolution that fits)\n";
 
-double parse_double(const std::string& opt, const std::string& v) {
-  std::size_t pos = 0;
-  double x = 0;
-  try {
-    x = std::stod(v, &pos);
-  } catch (...) {
-    pos = 0;
-  }
-  if (pos != v.size() || !std::isfinite(x)) throw chokeloops::Error(opt + " expects a number, got '" + v + "'");
-  return x;
-}
-
 int run(std::vector<std::string> args) {
   using namespace chokeloops;
   LevelSetOptions o;
   std::string input, output;
   bool quiet = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw Error(a + " needs a value (see --help)");
-      return args[++i];
-    };
-    if (a == "-h" || a == "--help") {
+  cli::Args in("levelset", std::move(args));
+  while (in.next()) {
+    if (in.is("-h", "--help")) {
       std::cout << kUsage;
       return 0;
-    } else if (a == "-o" || a == "--output") {
-      output = value();
-    } else if (a == "--resolution") {
-      double r = parse_double(a, value());
-      if (r < 2 || r > 100000 || r != std::floor(r)) throw Error("--resolution must be an integer in [2, 100000]");
-      o.resolution = int(r);
-    } else if (a == "--voxel-size") {
-      o.voxel_size = parse_double(a, value());
+    } else if (in.is("-o", "--output")) {
+      output = in.value();
+    } else if (in.is("--resolution")) {
+      o.resolution = int(in.integer(2, 100000));
+    } else if (in.is("--voxel-size")) {
+      o.voxel_size = in.number();
       if (!(o.voxel_size > 0)) throw Error("--voxel-size must be positive");
-    } else if (a == "--margin") {
-      o.margin = parse_double(a, value());
+    } else if (in.is("--margin")) {
+      o.margin = in.number();
       if (o.margin < 0) throw Error("--margin must be >= 0");
-    } else if (a == "--iso") {
-      o.iso = parse_double(a, value());
-    } else if (a == "--grid") {
-      o.grid_name = value();
-    } else if (a == "--max-memory") {
-      o.max_memory = parse_bytes(value());
-    } else if (a == "--no-fill-holes") {
+    } else if (in.is("--iso")) {
+      o.iso = in.number();
+    } else if (in.is("--grid")) {
+      o.grid_name = in.value();
+    } else if (in.is("--max-memory")) {
+      o.max_memory = parse_bytes(in.value());
+    } else if (in.is("--no-fill-holes")) {
       o.fill_holes = false;
-    } else if (a == "-q" || a == "--quiet") {
+    } else if (in.is("-q", "--quiet")) {
       quiet = true;
-    } else if (!a.empty() && a[0] == '-' && a != "-") {
-      throw Error("unknown option '" + a + "' (see --help)");
-    } else if (input.empty()) {
-      input = a;
     } else {
-      throw Error("more than one input file ('" + input + "', '" + a + "')");
+      in.positional(input, "input file");
     }
   }
   if (input.empty()) throw Error("no INPUT given\n" + std::string(kUsage).substr(0, std::string(kUsage).find('\n')));

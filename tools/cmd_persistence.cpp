@@ -1,15 +1,13 @@
 // `chokeloops persistence FIELD.vdb -o pairs.csv`: lower-star persistence pairs of a scalar field.
 #include <chrono>
-#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 
-#include <tbb/global_control.h>
-
 #include "chokeloops/grid.h"
 #include "chokeloops/persistence.h"
 #include "chokeloops/vdb_io.h"
+#include "args.h"
 #include "command.h"
 
 namespace {
@@ -37,45 +35,27 @@ int run(std::vector<std::string> args) {
   std::string input, output, grid_name;
   int threads = 0;
   bool quiet = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw Error(a + " needs a value (see --help)");
-      return args[++i];
-    };
-    if (a == "-h" || a == "--help") {
+  cli::Args in("persistence", std::move(args));
+  while (in.next()) {
+    if (in.is("-h", "--help")) {
       std::cout << kUsage;
       return 0;
-    } else if (a == "-o" || a == "--output") {
-      output = value();
-    } else if (a == "--grid") {
-      grid_name = value();
-    } else if (a == "--threads") {
-      std::string v = value();
-      std::size_t pos = 0;
-      long n = 0;
-      try {
-        n = std::stol(v, &pos);
-      } catch (...) {
-        pos = 0;
-      }
-      if (pos != v.size() || n < 1 || n > 4096) throw Error("--threads expects a positive integer, got '" + v + "'");
-      threads = int(n);
-    } else if (a == "-q" || a == "--quiet") {
+    } else if (in.is("-o", "--output")) {
+      output = in.value();
+    } else if (in.is("--grid")) {
+      grid_name = in.value();
+    } else if (in.is("--threads")) {
+      threads = in.threads();
+    } else if (in.is("-q", "--quiet")) {
       quiet = true;
-    } else if (!a.empty() && a[0] == '-') {
-      throw Error("unknown option '" + a + "' (see --help)");
-    } else if (input.empty()) {
-      input = a;
     } else {
-      throw Error("unexpected argument '" + a + "' (one input file; see --help)");
+      in.positional(input, "input file");
     }
   }
   if (input.empty()) throw Error("no input .vdb file given (see --help)");
   if (output.empty()) throw Error("no output file given: use -o PAIRS.csv (see --help)");
 
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  auto limit = cli::limit_threads(threads);
 
   auto t0 = std::chrono::steady_clock::now();
   ScalarGrid grid = read_vdb_dense(input, grid_name);

@@ -5,21 +5,12 @@
 
 #include "chokeloops/grid.h"
 #include "chokeloops/view.h"
+#include "args.h"
 #include "command.h"
 
 using namespace chokeloops;
 
 namespace {
-
-int parse_int(const std::string& opt, const std::string& v) {
-  try {
-    std::size_t used = 0;
-    int x = std::stoi(v, &used);
-    if (used == v.size()) return x;
-  } catch (const std::exception&) {
-  }
-  throw Error(opt + " expects an integer, got '" + v + "'");
-}
 
 const char* kRenderHelp =
     "usage: chokeloops render OUTDIR [-o FILE.png] [--width W] [--height H]\n\n"
@@ -40,19 +31,13 @@ cli::Register render_cmd("render", "draw OUTDIR's surface and loops into a PNG (
                          [](std::vector<std::string> args) -> int {
   std::string outdir, png;
   int width = 1200, height = 900;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw Error(a + " needs a value (see chokeloops render --help)");
-      return args[++i];
-    };
-    if (a == "-h" || a == "--help") { std::cout << kRenderHelp; return 0; }
-    else if (a == "-o" || a == "--output") png = value();
-    else if (a == "--width") width = parse_int(a, value());
-    else if (a == "--height") height = parse_int(a, value());
-    else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops render --help)");
-    else if (outdir.empty()) outdir = a;
-    else throw Error("unexpected argument " + a + " (see chokeloops render --help)");
+  cli::Args in("render", std::move(args));
+  while (in.next()) {
+    if (in.is("-h", "--help")) { std::cout << kRenderHelp; return 0; }
+    else if (in.is("-o", "--output")) png = in.value();
+    else if (in.is("--width")) width = int(in.integer(16, 16384));
+    else if (in.is("--height")) height = int(in.integer(16, 16384));
+    else in.positional(outdir, "OUTDIR");
   }
   if (outdir.empty()) { std::cerr << kRenderHelp; return 2; }
   if (png.empty()) png = outdir + "/loops.png";
@@ -65,17 +50,11 @@ cli::Register view_cmd("view", "(re)write OUTDIR/view.html, the interactive page
                        [](std::vector<std::string> args) -> int {
   std::string outdir;
   std::size_t budget = kViewFaceBudget;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "-h" || a == "--help") { std::cout << kViewHelp; return 0; }
-    else if (a == "--face-budget") {
-      if (i + 1 >= args.size()) throw Error("--face-budget needs a value");
-      int n = parse_int(a, args[++i]);
-      if (n < 100) throw Error("--face-budget must be at least 100");
-      budget = std::size_t(n);
-    } else if (!a.empty() && a[0] == '-') throw Error("unknown option " + a + " (see chokeloops view --help)");
-    else if (outdir.empty()) outdir = a;
-    else throw Error("unexpected argument " + a + " (see chokeloops view --help)");
+  cli::Args in("view", std::move(args));
+  while (in.next()) {
+    if (in.is("-h", "--help")) { std::cout << kViewHelp; return 0; }
+    else if (in.is("--face-budget")) budget = std::size_t(in.integer(100, 1000000000));
+    else in.positional(outdir, "OUTDIR");
   }
   if (outdir.empty()) { std::cerr << kViewHelp; return 2; }
   write_view_html(outdir, budget);

@@ -1,0 +1,88 @@
+// Every subcommand reads its options through one reader (tools/args.h): a wrong option, a missing or
+// malformed value, an out-of-range number or a second positional gives exit code 2 and one line that names
+// the option, before any input is read.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Outcome {
+  int code = -1;
+  std::string err;
+};
+
+Outcome run_cli(const std::string& args) {
+  fs::path err = fs::temp_directory_path() / ("chokeloops_cli_args_" + std::to_string(::getpid()) + ".txt");
+  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' " + args + " >/dev/null 2>'" + err.string() + "'";
+  int status = std::system(cmd.c_str());
+  Outcome o;
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err);
+  std::stringstream s;
+  s << in.rdbuf();
+  o.err = s.str();
+  fs::remove(err);
+  return o;
+}
+
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+struct Case {
+  const char* args;
+  const char* must_say;
+};
+
+TEST(CliArgs, MistakesExitWith2AndOneLineNamingTheOption) {
+  // The input files need not exist: arguments are checked first.
+  const Case cases[] = {
+      {"analyze --bogus", "unknown option --bogus"},
+      {"analyze in.obj -o out --resolution", "--resolution needs a value"},
+      {"analyze in.obj -o out --resolution abc", "--resolution expects an integer in [8, 4096], got 'abc'"},
+      {"analyze in.obj -o out --resolution 4", "--resolution expects an integer in [8, 4096], got '4'"},
+      {"analyze in.obj -o out --resolution 100.5", "got '100.5'"},
+      {"analyze in.obj -o out --threads 0", "--threads expects an integer in [1, 4096], got '0'"},
+      {"analyze in.obj -o out --voxel-size 1e999", "--voxel-size expects a number"},
+      {"analyze in.obj -o out --margin nan", "--margin expects a number, got 'nan'"},
+      {"analyze a.obj b.obj -o out", "more than one input given ('a.obj' and 'b.obj')"},
+      {"levelset in.obj -o out.vdb --iso x", "--iso expects a number, got 'x'"},
+      {"levelset in.obj -o out.vdb --resolution 1", "--resolution expects an integer in [2, 100000]"},
+      {"persistence f.vdb -o p.csv --threads two", "--threads expects an integer in [1, 4096], got 'two'"},
+      {"persistence f.vdb g.vdb -o p.csv", "more than one input file given"},
+      {"render out --width 3", "--width expects an integer in [16, 16384], got '3'"},
+      {"view out --face-budget", "--face-budget needs a value"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    Outcome o = run_cli(c.args);
+    EXPECT_EQ(o.code, 2);
+    EXPECT_EQ(lines(o.err), 1) << o.err;
+    EXPECT_NE(o.err.find(c.must_say), std::string::npos) << o.err;
+  }
+}
+
+TEST(CliArgs, ResolutionAcceptsAutoAndIntegers) {
+  // Reaches the input stage (and fails there on the missing file), so the options themselves were accepted.
+  for (const char* r : {"auto", "64", "4096"}) {
+    SCOPED_TRACE(r);
+    Outcome o = run_cli(std::string("analyze /nonexistent/in.obj -o /nonexistent/out --resolution ") + r);
+    EXPECT_EQ(o.code, 2);
+    EXPECT_NE(o.err.find("/nonexistent/in.obj"), std::string::npos) << o.err;
+    EXPECT_EQ(o.err.find("--resolution"), std::string::npos) << o.err;
+  }
+}
+
+}  // namespace
