@@ -1,6 +1,7 @@
 // Dimension 1 of the lower-star persistence engine (see persistence.cpp for the whole): the edges left by
 // dim 0 and the triangles left by dim 2 are paired by reducing only the boundaries of those triangles.
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <deque>
@@ -118,61 +119,72 @@ void Engine::dim1(PersistenceDiagram& out) {
   using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)>;
   // In parallel: each death triangle's boundary up to its first birth pivot, which needs no other column.
   // Most columns end there (their pivot is not owned yet); the rest continue below in filtration order.
-  struct Columns { std::vector<EdgeKey> entries; std::vector<std::uint32_t> start{0}; };
-  const std::size_t chunk = 2048, nchunks = (deaths1_.size() + chunk - 1) / chunk;
-  std::vector<Columns> first(nchunks);
+  // This part is order-free, so it runs in grid order: neighbouring triangles share lower links and
+  // field memory, which the filtration order scatters.
+  const std::size_t n = deaths1_.size();
+  std::vector<std::uint32_t> grid_order(n);
+  for (std::size_t i = 0; i < n; ++i) grid_order[i] = std::uint32_t(i);
+  tbb::parallel_sort(grid_order.begin(), grid_order.end(), [this](std::uint32_t a, std::uint32_t b) {
+    return deaths1_[a].v[0] < deaths1_[b].v[0] || (deaths1_[a].v[0] == deaths1_[b].v[0] && a < b);
+  });
+  struct Where { std::uint32_t chunk, begin, end; };
+  std::vector<Where> where(n);
+  const std::size_t chunk = 2048, nchunks = (n + chunk - 1) / chunk;
+  std::vector<std::vector<EdgeKey>> first(nchunks);
   tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
     Heap heap(heap_less);
-    Columns& cols = first[c];
-    for (std::size_t i = c * chunk; i < std::min(deaths1_.size(), (c + 1) * chunk); ++i) {
+    std::vector<EdgeKey>& entries = first[c];
+    for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
+      const std::uint32_t i = grid_order[k];
       const auto& tau = deaths1_[i].v;
       heap.push(make_edge(tau[0], tau[1]));
       heap.push(make_edge(tau[0], tau[2]));
       heap.push(make_edge(tau[1], tau[2]));
+      where[i].chunk = std::uint32_t(c);
+      where[i].begin = std::uint32_t(entries.size());
       EdgeKey p;
-      if (pop_to_birth_pivot(heap, p)) drain(heap, p, cols.entries);
-      cols.start.push_back(std::uint32_t(cols.entries.size()));
+      if (pop_to_birth_pivot(heap, p)) drain(heap, p, entries);
+      where[i].end = std::uint32_t(entries.size());
     }
   });
+  std::vector<std::uint32_t>().swap(grid_order);
   report("dim 1", 0.8);
   // In filtration order: a column whose pivot is owned adds the owner's column and goes on reducing.
   struct Span { const EdgeKey* begin; const EdgeKey* end; };
   std::vector<Span> owner(births1_, Span{nullptr, nullptr});
   std::deque<std::vector<EdgeKey>> continued;  // columns that needed additions (stable addresses)
   Heap heap(heap_less);
-  for (std::size_t c = 0, i = 0; c < nchunks; ++c) {
-    const Columns& cols = first[c];
-    for (std::size_t k = 0; k + 1 < cols.start.size(); ++k, ++i) {
-      if (cols.start[k] == cols.start[k + 1]) throw std::logic_error("a dim-1 death triangle reduced to zero");
-      Span column{cols.entries.data() + cols.start[k], cols.entries.data() + cols.start[k + 1]};
-      EdgeKey p = *column.begin;
-      std::uint32_t r = birth_rank(p.hi, p.lo);
-      if (owner[r].begin) {
-        for (const EdgeKey* e = column.begin + 1; e != column.end; ++e) heap.push(*e);
-        for (;;) {
-          for (const EdgeKey* e = owner[r].begin + 1; e != owner[r].end; ++e) heap.push(*e);
-          if (!pop_to_birth_pivot(heap, p)) throw std::logic_error("a dim-1 death triangle reduced to zero");
-          r = birth_rank(p.hi, p.lo);
-          if (!owner[r].begin) break;
-        }
-        continued.emplace_back();
-        drain(heap, p, continued.back());
-        column = {continued.back().data(), continued.back().data() + continued.back().size()};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Where& w = where[i];
+    if (w.begin == w.end) throw std::logic_error("a dim-1 death triangle reduced to zero");
+    Span column{first[w.chunk].data() + w.begin, first[w.chunk].data() + w.end};
+    EdgeKey p = *column.begin;
+    std::uint32_t r = birth_rank(p.hi, p.lo);
+    if (owner[r].begin) {
+      for (const EdgeKey* e = column.begin + 1; e != column.end; ++e) heap.push(*e);
+      for (;;) {
+        for (const EdgeKey* e = owner[r].begin + 1; e != owner[r].end; ++e) heap.push(*e);
+        if (!pop_to_birth_pivot(heap, p)) throw std::logic_error("a dim-1 death triangle reduced to zero");
+        r = birth_rank(p.hi, p.lo);
+        if (!owner[r].begin) break;
       }
-      owner[r] = column;
-      const auto& tau = deaths1_[i].v;
-      PersistencePair pr;
-      pr.dim = 1;
-      pr.birth = f_[p.hi];
-      pr.death = f_[tau[0]];
-      pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
-      pr.birth_vertex = p.hi;
-      pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
-      pr.death_vertex = tau[0];
-      pr.birth_lobes = {p.hi + delta_[lower_link(p.hi).lowest], p.lo};
-      pr.death_lobes = deaths1_[i].lobes;
-      out.pairs.push_back(pr);
+      continued.emplace_back();
+      drain(heap, p, continued.back());
+      column = {continued.back().data(), continued.back().data() + continued.back().size()};
     }
+    owner[r] = column;
+    const auto& tau = deaths1_[i].v;
+    PersistencePair pr;
+    pr.dim = 1;
+    pr.birth = f_[p.hi];
+    pr.death = f_[tau[0]];
+    pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
+    pr.birth_vertex = p.hi;
+    pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
+    pr.death_vertex = tau[0];
+    pr.birth_lobes = {p.hi + delta_[lower_link(p.hi).lowest], p.lo};
+    pr.death_lobes = deaths1_[i].lobes;
+    out.pairs.push_back(pr);
   }
 }
 
