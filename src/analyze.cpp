@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "chokeloops/mesh_adjacency.h"
 #include "chokeloops/topology.h"
@@ -59,19 +60,21 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   t = Clock::now();
   stage("loops", 0);
   MeshAdjacency adjacency = build_adjacency(r.surface);
-  r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops);
-  r.timings_ms["loops"] = ms_since(t);
-  // Never a silently wrong generator: each must be non-contractible on the surface (CGAL
-  // Surface_mesh_topology); one that is not is reported as missing.
-  t = Clock::now();
   bool any_generator = false;
-  for (auto& l : r.loops) any_generator |= l.found && l.choke.kind == Kind::Generator;
-  if (any_generator && options.check_generators) {
-    SurfaceTopology topology(r.surface);
+  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
+  // One topology of the surface serves the choice of every generator's curve and the check below.
+  std::unique_ptr<SurfaceTopology> topology;
+  if (any_generator) topology = std::make_unique<SurfaceTopology>(r.surface, adjacency);
+  r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops, topology.get());
+  r.timings_ms["loops"] = ms_since(t);
+  // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks
+  // that it did; a loop that became contractible is reported as missing.
+  t = Clock::now();
+  if (topology && options.check_generators) {
     for (auto& l : r.loops)
-      if (l.found && l.choke.kind == Kind::Generator && topology.contractible(l.edge_path)) {
+      if (l.found && l.choke.kind == Kind::Generator && topology->contractible_fast(l.edge_path)) {
         l.found = false;
-        l.note = "the membrane's interface curve is contractible on the surface (a flat core, e.g. a thin wall); no valid generator loop";
+        l.note = "the generator's loop is contractible on the surface after shortening; no valid generator loop";
         l.points.clear();
         l.edge_path.clear();
       }

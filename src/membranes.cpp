@@ -14,6 +14,14 @@
 // then absorbs every other piece; the connectivity is the Freudenthal complex's (14 neighbours) everywhere;
 // the seed pieces are found in a small box of about the depth (around a handle they join farther away),
 // and the flood box grows until the interface closes on the surface near the choke.
+//
+// Generators: the zones' interface can have several curves on the surface. A generator's loop must be
+// non-contractible there, so its curves are asked in order of distance from the choke (SurfaceTopology::
+// contractible_fast, milliseconds each) and the nearest non-contractible one is taken. On a flat core (the
+// cup's thin wall at 256^3) the filtration order lets one zone enclose the other and every curve of the
+// membrane is contractible, in every box; the same box is then flooded by distance from the seeds (the
+// interface is their bisector, a straight cut across the wall), which gives a valid loop. CHOKELOOPS_DEBUG_MEMBRANES=1
+// traces the choice on stderr.
 #include "chokeloops/membranes.h"
 
 #include <tbb/parallel_for.h>
@@ -21,6 +29,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -32,25 +42,39 @@ namespace chokeloops {
 
 namespace {
 
-enum class Attempt { Found, Grow, Shrink };
+// GrowContractible: curves closed near the choke, but (for a generator) each is contractible on the surface.
+enum class Attempt { Found, Grow, GrowContractible, Shrink };
 
 class LoopTracer {
  public:
-  LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency)
-      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency) {}
+  LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology* topology)
+      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency), T_(topology),
+        debug_(std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr) {}
 
   Loop trace(const Choke& c, const LoopOptions& options) const {
     Loop loop;
     loop.choke = c;
     const double h = g_.voxel_size;
     const int full = std::max({g_.dims[0], g_.dims[1], g_.dims[2]});
-    int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
-    int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
+    const int r0 = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
+    const int seed_r0 = int(std::ceil(c.depth / h)) + options.box_margin;
+    bool only_contractible = false;
     Polyline3 raw;
+    std::vector<int> raw_path;  // raw snapped to surface edges, when try_box already did it
+    // A generator whose every interface curve near the choke is contractible sits on a flat core (a thin
+    // wall): there the filtration order spreads the two zones erratically (one can enclose the other) and
+    // the membrane need not cut the handle; a bigger box does not change that. Flooding the same box by
+    // distance from the two seeds instead puts the interface on their bisector, a cut straight across the
+    // wall.
+    int r = r0, seed_r = seed_r0;
     for (int attempt = 0; attempt < 16; ++attempt) {
-      Attempt a = try_box(c, r, seed_r, raw);
+      Attempt a = try_box(c, r, seed_r, false, raw, raw_path);
+      if (a == Attempt::GrowContractible) {
+        only_contractible = true;
+        a = try_box(c, r, seed_r, true, raw, raw_path);
+      }
       if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
-      if (a == Attempt::Grow) {
+      if (a == Attempt::Grow || a == Attempt::GrowContractible) {
         if (r >= full) break;
         r = std::min(full, int(std::ceil(r * 1.8)));
       } else {
@@ -59,7 +83,9 @@ class LoopTracer {
       }
     }
     if (!loop.found) {
-      loop.note = "the membrane did not close on the surface near the choke";
+      loop.note = only_contractible
+                      ? "every interface curve of the membrane near the choke is contractible on the surface (a flat core, e.g. a thin wall)"
+                      : "the membrane did not close on the surface near the choke";
       return loop;
     }
     loop.raw_length = closed_length(raw);
@@ -67,13 +93,13 @@ class LoopTracer {
     if (options.shorten) {
       ShortenOptions so;
       so.max_move = c.depth + 3 * h;
-      ShortenResult best = shorten_polyline(S_, A_, raw, so);
+      ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       if (best.rings == 0) loop.note = "not shortened: no annulus band around the loop";
       if (best.rings > 0 && options.slide) slide_to_narrowest(best, so, c.depth + 2 * h);
       if (best.points.size() >= 3) loop.points = best.points;
       loop.edge_path = best.edge_path;
     } else {
-      loop.edge_path = snap_polyline_to_edge_path(S_, A_, raw);
+      loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
     }
     describe(loop);
     return loop;
@@ -173,7 +199,7 @@ class LoopTracer {
     loop.radius_mean = rsum / double(P.size());
   }
 
-  Attempt try_box(const Choke& c, int r, int seed_radius, Polyline3& out) const {
+  Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path) const {
     const bool handle = c.side == Side::Handle;
     const Id s = c.saddle;
     // "Below" = earlier in the flood's order: the filtration for handles, its reverse for tunnels.
@@ -274,7 +300,12 @@ class LoopTracer {
           std::int8_t& l = label[u.li];
           if (l == 0) {
             l = lx;
-            buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u);
+            if (!by_distance) {
+              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u);
+            } else {
+              if (b + 1 == buckets.size()) buckets.emplace_back();
+              buckets[b + 1].push_back(u);
+            }
           }
         });
         if (at_shore) shore.push_back(x);
@@ -327,13 +358,14 @@ class LoopTracer {
         else it->second[1] = i;
       }
     std::vector<char> used(segments.size(), 0);
-    double best = 1e300;
     const double h = g_.voxel_size;
     auto midpoint = [&](std::int64_t e) {
       const auto& a = S_.vertices[int(e >> 32)];
       const auto& b = S_.vertices[int(e & 0xffffffff)];
       return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
     };
+    struct Candidate { double distance; Polyline3 curve; };
+    std::vector<Candidate> candidates;
     for (int start = 0; start < int(segments.size()); ++start) {
       if (used[start]) continue;
       Polyline3 curve;
@@ -356,9 +388,44 @@ class LoopTracer {
       double d = 1e300;
       for (auto& p : curve)
         d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
-      if (d < best) { best = d; out = curve; }
+      if (debug_ && c.kind == Kind::Generator && d > c.depth + 4 * h && T_) {
+        bool ct = true;
+        try { ct = T_->contractible_fast(snap_polyline_to_edge_path(S_, A_, curve)); } catch (const Error&) {}
+        std::fprintf(stderr, "membranes: %s generator depth %g box %d: far curve at %g, %zu points %s\n", to_string(c.side),
+                     c.depth, r, d, curve.size(), ct ? "contractible" : "NON-contractible");
+      }
+      if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve)});
     }
-    return best <= c.depth + 4 * h ? Attempt::Found : Attempt::Grow;
+    if (candidates.empty()) return Attempt::Grow;
+    // Nearest first; the curves come from sorted faces, so ties resolve the same way on every run.
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
+    if (c.kind != Kind::Generator || !T_) {
+      out = std::move(candidates[0].curve);
+      out_path.clear();
+      return Attempt::Found;
+    }
+    // A generator's membrane is a disk across its handle (tunnel); its boundary must be non-trivial on the
+    // surface. Where the core is flat (a thin wall) the two zones also meet along the wall, and that
+    // interface curve bounds a disk on the surface: it may be the nearest one, so each curve is asked in turn.
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      std::vector<int> path;
+      try {
+        path = snap_polyline_to_edge_path(S_, A_, candidates[i].curve);
+      } catch (const Error&) {
+        continue;  // not a connected curve on the surface
+      }
+      bool contractible = path.size() < 3 || T_->contractible_fast(path);
+      if (debug_)
+        std::fprintf(stderr, "membranes: %s generator depth %g box %d: curve %zu/%zu at %g, %zu points, %s\n",
+                     to_string(c.side), c.depth, r, i + 1, candidates.size(), candidates[i].distance,
+                     candidates[i].curve.size(), contractible ? "contractible" : "non-contractible");
+      if (contractible) continue;
+      out = std::move(candidates[i].curve);
+      out_path = std::move(path);
+      return Attempt::Found;
+    }
+    return Attempt::GrowContractible;
   }
 
   const ScalarGrid& g_;
@@ -366,13 +433,15 @@ class LoopTracer {
   FreudenthalComplex cx_;
   const SurfaceMesh& S_;
   const MeshAdjacency& A_;
+  SurfaceTopology* T_;  // null: generators are not checked while their curve is chosen
+  bool debug_;
 };
 
 }  // namespace
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                              const std::vector<Choke>& chokes, const LoopOptions& options) {
-  LoopTracer tracer(grid, surface, adjacency);
+                              const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology) {
+  LoopTracer tracer(grid, surface, adjacency, topology);
   std::vector<Loop> loops(chokes.size());
   tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) { loops[i] = tracer.trace(chokes[i], options); },
                     tbb::simple_partitioner());

@@ -43,12 +43,6 @@ const std::map<std::string, std::string> kNeedsFinerGrid = {
     {"meshes/seahorse2_100K_directional.off", "handles thinner than a voxel at 256 (surface genus 3 for 8)"},
 };
 
-// Models where a generator's membrane interface is known to be contractible (a flat thin-wall core): the
-// self-check drops that loop (found = false, with a note) rather than report a wrong one. Known bug.
-const std::map<std::string, std::string> kKnownMissingGenerator = {
-    {"meshes/cup_directional.off", "one handle generator's interface curve on the thin cup wall is contractible"},
-};
-
 }  // namespace
 
 class ManifestMeshes : public ::testing::TestWithParam<ManifestMesh> {};
@@ -65,17 +59,20 @@ TEST_P(ManifestMeshes, GeneratorsMatchTheGenus) {
   EXPECT_TRUE(r.surface_stats.closed_manifold);
   EXPECT_EQ(r.chokes.handle_generators, m.genus);
   EXPECT_EQ(r.chokes.tunnel_generators, m.genus);
+  // Every generator found and non-contractible, by CGAL's Surface_mesh_topology (independent of the fast
+  // check the loop stage uses to choose and verify its curves).
   SurfaceTopology topo(r.surface);
-  bool missing_known = kKnownMissingGenerator.count(m.file) > 0;
-  int missing = 0;
+  int generators = 0;
   for (const Loop& l : r.loops) {
     SCOPED_TRACE(std::string(to_string(l.choke.side)) + " " + to_string(l.choke.kind) + " depth " + std::to_string(l.choke.depth));
-    if (!l.found && missing_known && l.choke.kind == Kind::Generator) { ++missing; continue; }
     ASSERT_TRUE(l.found) << l.note;
     EXPECT_TRUE(loop_is_simple(l.edge_path));
-    if (l.choke.kind == Kind::Generator) EXPECT_FALSE(topo.contractible(l.edge_path));
+    if (l.choke.kind == Kind::Generator) {
+      ++generators;
+      EXPECT_FALSE(topo.contractible(l.edge_path));
+    }
   }
-  if (missing_known) EXPECT_LE(missing, 1) << kKnownMissingGenerator.at(m.file);
+  EXPECT_EQ(generators, 2 * m.genus);
 }
 
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(ManifestMeshes);  // ManifestHasClosedMeshes reports missing data

@@ -36,8 +36,13 @@ struct Loop {
   int box_radius = 0;              // half-size in voxels of the box the membrane closed in
 };
 
-// Loops of all chokes, computed in parallel; the result does not depend on the thread count.
+class SurfaceTopology;
+
+// Loops of all chokes, computed in parallel; the result does not depend on the thread count. With a
+// topology of `surface`, a generator's loop is chosen among its membrane's interface curves as the nearest
+// one that is non-contractible on the surface (the box grows until one appears); without, the nearest.
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                              const std::vector<Choke>& chokes, const LoopOptions& options = {});
+                              const std::vector<Choke>& chokes, const LoopOptions& options = {},
+                              SurfaceTopology* topology = nullptr);
 
 }  // namespace chokeloops
