@@ -134,7 +134,8 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
   const auto& mesh = impl_->mesh;
   const auto& adj = impl_->adj;
   const int c = impl_->vertex_label[loop[0]];
-  if (c < 0 || !impl_->closed[c] || !loop_is_simple(loop)) return contractible(loop);
+  if (c < 0 || !impl_->closed[c]) return contractible(loop);
+  if (!loop_is_simple(loop)) return null_homologous(loop) && contractible(loop);
   auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
   std::unordered_set<std::uint64_t> cut;
   std::vector<char> on_loop(mesh.vertices.size(), 0);  // spares most edges the hash look-up
@@ -178,6 +179,43 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
   const std::int64_t E = (3 * F + L) / 2;  // interior edges are shared by two of its faces, loop edges not
   const std::int64_t chi = V - E + F;
   return chi == 1 || impl_->euler[c] - chi == 1;
+}
+
+bool SurfaceTopology::null_homologous(const std::vector<int>& loop) {
+  impl_->check(loop);
+  const auto& mesh = impl_->mesh;
+  const auto& adj = impl_->adj;
+  const int c = impl_->vertex_label[loop[0]];
+  if (c < 0 || !impl_->closed[c]) return contractible(loop);
+  if (loop.size() < 3) return true;
+  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_map<std::uint64_t, char> parity;
+  std::vector<char> on_loop(mesh.vertices.size(), 0);
+  for (size_t i = 0; i < loop.size(); ++i) {
+    parity[key(loop[i], loop[(i + 1) % loop.size()])] ^= 1;
+    on_loop[loop[i]] = 1;
+  }
+  const int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  if (h0 < 0) return contractible(loop);
+  std::vector<signed char> colour(mesh.faces.size(), -1);
+  std::vector<int> queue{MeshAdjacency::face(h0)};
+  colour[queue[0]] = 0;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    int f = queue[q];
+    for (int k = 0; k < 3; ++k) {
+      int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      char flip = 0;
+      if (on_loop[a] && on_loop[b]) {
+        auto it = parity.find(key(a, b));
+        if (it != parity.end()) flip = it->second;
+      }
+      int g = MeshAdjacency::face(adj.twin[3 * f + k]);
+      signed char want = static_cast<signed char>(colour[f] ^ flip);
+      if (colour[g] < 0) { colour[g] = want; queue.push_back(g); }
+      else if (colour[g] != want) return false;
+    }
+  }
+  return true;
 }
 
 bool SurfaceTopology::separates(const std::vector<int>& loop) {

@@ -121,6 +121,7 @@ TEST(Topology, FastContractibilityAgreesWithCgal) {
     EXPECT_EQ(topo.contractible(c.loop), c.contractible);
     EXPECT_EQ(topo.contractible_fast(c.loop), c.contractible);
     EXPECT_EQ(topo.separates(c.loop), c.separates);
+    EXPECT_EQ(topo.null_homologous(c.loop), c.separates);  // for a simple loop: null in Z/2 iff it separates
   }
   // A sphere's equator (separating, both sides disks) and a loop on a hollow ball's inner sphere.
   auto s = cube_surface(48, analytic::ball(0.3));
@@ -134,4 +135,9 @@ TEST(Topology, FastContractibilityAgreesWithCgal) {
   auto meridian_twice = cases[1].loop;
   meridian_twice.insert(meridian_twice.end(), cases[1].loop.begin(), cases[1].loop.end());
   EXPECT_FALSE(topo.contractible_fast(meridian_twice));
+  EXPECT_TRUE(topo.null_homologous(meridian_twice));  // twice is zero mod 2, yet essential (CGAL decides)
+  auto three_times = meridian_twice;
+  three_times.insert(three_times.end(), cases[1].loop.begin(), cases[1].loop.end());
+  EXPECT_FALSE(topo.null_homologous(three_times));
+  EXPECT_FALSE(topo.contractible_fast(three_times));
 }

@@ -32,8 +32,14 @@ class SurfaceTopology {
   // has Euler characteristic 1. Two face floods, one from each side of the loop and advanced in turn, decide
   // it in time proportional to the smaller side (a separating loop) or to the part swept before they meet
   // (a non-separating one): milliseconds where building CGAL's structure over a large surface takes
-  // seconds. Any other loop (not simple, or on a component with boundary) goes to contractible().
+  // seconds. A loop that is not simple is answered by null_homologous() when that shows it essential;
+  // the rest (and any loop on a component with boundary) goes to contractible().
   bool contractible_fast(const std::vector<int>& loop);
+  // Null in H1(surface; Z/2): the component's faces can be 2-coloured so that exactly the edges the loop
+  // uses an odd number of times separate the colours. Exact for any closed edge path (simple or not) on a
+  // closed component, one face flood; a loop that is not null is non-contractible. On a component with
+  // boundary it answers contractible() instead (a sufficient condition only).
+  bool null_homologous(const std::vector<int>& loop);
   // Removing the loop's edges splits the loop's component into more face-connected parts.
   bool separates(const std::vector<int>& loop);
   // Component (face_components numbering) that holds vertex v, -1 for an isolated vertex.
