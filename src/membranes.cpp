@@ -16,8 +16,8 @@
 // and the flood box grows until the interface closes on the surface near the choke.
 //
 // Generators: the zones' interface can have several curves on the surface. A generator's loop must be
-// non-contractible there, so its curves are asked in order of distance from the choke (SurfaceTopology::
-// contractible_fast, milliseconds each) and the nearest non-contractible one is taken. On a flat core (the
+// non-contractible there, so its curves are asked in order of distance from the choke and the nearest one
+// that is not null in Z/2 homology (SurfaceTopology::null_homologous, one face flood) is taken. On a flat core (the
 // cup's thin wall at 256^3) the filtration order lets one zone enclose the other and every curve of the
 // membrane is contractible, in every box; the same box is then flooded by distance from the seeds (the
 // interface is their bisector, a straight cut across the wall), which gives a valid loop. CHOKELOOPS_DEBUG_MEMBRANES=1
@@ -28,6 +28,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -68,7 +69,11 @@ class LoopTracer {
     // wall.
     int r = r0, seed_r = seed_r0;
     for (int attempt = 0; attempt < 16; ++attempt) {
+      auto t_box = std::chrono::steady_clock::now();
       Attempt a = try_box(c, r, seed_r, false, raw, raw_path);
+      if (debug_)
+        std::fprintf(stderr, "membranes: %s %s depth %g box %d seed %d: attempt %d, %.0f ms\n", to_string(c.side), to_string(c.kind),
+                     c.depth, r, seed_r, int(a), std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_box).count());
       if (a == Attempt::GrowContractible) {
         only_contractible = true;
         a = try_box(c, r, seed_r, true, raw, raw_path);
@@ -88,6 +93,7 @@ class LoopTracer {
                       : "the membrane did not close on the surface near the choke";
       return loop;
     }
+    auto t_shorten = std::chrono::steady_clock::now();
     loop.raw_length = closed_length(raw);
     loop.points = raw;
     if (options.shorten) {
@@ -102,6 +108,9 @@ class LoopTracer {
       loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
     }
     describe(loop);
+    if (debug_)
+      std::fprintf(stderr, "membranes: %s %s depth %g: shortened/slid in %.0f ms\n", to_string(c.side), to_string(c.kind), c.depth,
+                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_shorten).count());
     return loop;
   }
 
@@ -120,28 +129,34 @@ class LoopTracer {
       const Polyline3 start = best.points;
       const double length_before = best.length;
       double moved_by = 0;
-      for (double f : {0.25, 0.5})
-        for (double sign : {-1.0, 1.0}) {
-          double step = sign * f * reach;
-          Polyline3 moved = start;
-          for (auto& p : moved)
-            for (int a = 0; a < 3; ++a) p[a] += step * n[a];
-          // Only a loop on a tube slides along it: every moved point must stay on the surface (|phi|
-          // small); otherwise snapping could change its homotopy class.
-          double off = 0;
-          for (auto& p : moved) off = std::max(off, std::abs(phi_at(p)));
-          if (off > 2 * g_.voxel_size) continue;
-          ShortenResult r;
-          try {
-            r = shorten_polyline(S_, A_, moved, so);
-          } catch (const Error&) {
-            continue;  // the moved loop left the surface (e.g. past the end of the tube)
-          }
-          if (r.rings > 0 && r.points.size() >= 3 && loop_is_simple(r.edge_path) && r.length < best.length) {
-            best = std::move(r);
-            moved_by = std::abs(step);
-          }
+      // The four probes are independent: run them in parallel (a long slide is often the last loop left),
+      // then pick in a fixed order, so the result is the sequential one.
+      const std::array<double, 4> steps{-0.25 * reach, 0.25 * reach, -0.5 * reach, 0.5 * reach};
+      std::array<ShortenResult, 4> probes;
+      std::array<char, 4> ok{0, 0, 0, 0};
+      tbb::parallel_for(0, 4, [&](int i) {
+        Polyline3 moved = start;
+        for (auto& p : moved)
+          for (int a = 0; a < 3; ++a) p[a] += steps[i] * n[a];
+        // Only a loop on a tube slides along it: every moved point must stay on the surface (|phi|
+        // small); otherwise snapping could change its homotopy class.
+        double off = 0;
+        for (auto& p : moved) off = std::max(off, std::abs(phi_at(p)));
+        if (off > 2 * g_.voxel_size) return;
+        try {
+          probes[i] = shorten_polyline(S_, A_, moved, so);
+          ok[i] = 1;
+        } catch (const Error&) {
+          // the moved loop left the surface (e.g. past the end of the tube)
         }
+      });
+      for (int i = 0; i < 4; ++i) {
+        ShortenResult& r = probes[i];
+        if (ok[i] && r.rings > 0 && r.points.size() >= 3 && loop_is_simple(r.edge_path) && r.length < best.length) {
+          best = std::move(r);
+          moved_by = std::abs(steps[i]);
+        }
+      }
       if (best.length >= length_before) break;
       travelled += moved_by;
       probe.points = best.points;
@@ -228,7 +243,17 @@ class LoopTracer {
         fn(node_at(q));
       }
     };
+    // label: 0 not reached yet, 1 or 2 the zone, kOutside beyond the region. Marking the region once, in
+    // memory order, spares the flood a scattered read of the grid for each of a vertex's 14 neighbours
+    // (that read was a third of the loop stage on fertility).
+    constexpr std::int8_t kOutside = 3;
     std::vector<std::int8_t> label(lz * n[2], 0);
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j) {
+        const float* row = f_ + base + gy * j + gz * k;
+        std::int8_t* out = label.data() + ly * std::size_t(j) + lz * std::size_t(k);
+        for (int i = 0; i < n[0]; ++i) out[i] = (handle ? row[i] <= 0 : row[i] > 0) ? 0 : kOutside;
+      }
 
     // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
     // choke's depth; around a handle they join farther away, which the flood below must not see.
@@ -296,8 +321,8 @@ class LoopTracer {
         std::int8_t lx = label[x.li];
         bool at_shore = false;
         for_neighbours(x, [&](const Node& u) {
-          if (!region(u.v)) { at_shore = true; return; }
           std::int8_t& l = label[u.li];
+          if (l == kOutside) { at_shore = true; return; }
           if (l == 0) {
             l = lx;
             if (!by_distance) {
@@ -390,9 +415,9 @@ class LoopTracer {
         d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
       if (debug_ && c.kind == Kind::Generator && d > c.depth + 4 * h && T_) {
         bool ct = true;
-        try { ct = T_->contractible_fast(snap_polyline_to_edge_path(S_, A_, curve)); } catch (const Error&) {}
+        try { ct = T_->null_homologous(snap_polyline_to_edge_path(S_, A_, curve)); } catch (const Error&) {}
         std::fprintf(stderr, "membranes: %s generator depth %g box %d: far curve at %g, %zu points %s\n", to_string(c.side),
-                     c.depth, r, d, curve.size(), ct ? "contractible" : "NON-contractible");
+                     c.depth, r, d, curve.size(), ct ? "null-homologous" : "ESSENTIAL");
       }
       if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve)});
     }
@@ -415,11 +440,15 @@ class LoopTracer {
       } catch (const Error&) {
         continue;  // not a connected curve on the surface
       }
-      bool contractible = path.size() < 3 || T_->contractible_fast(path);
+      // Null in Z/2 homology rather than contractible: one flood for any curve (a snapped curve may touch
+      // itself, where the exact contractibility test would need CGAL's structure over the whole surface), and
+      // a generator's curve must be non-null anyway: a disk across a handle cuts it, so its boundary cannot
+      // separate the surface.
+      bool contractible = path.size() < 3 || T_->null_homologous(path);
       if (debug_)
         std::fprintf(stderr, "membranes: %s generator depth %g box %d: curve %zu/%zu at %g, %zu points, %s\n",
                      to_string(c.side), c.depth, r, i + 1, candidates.size(), candidates[i].distance,
-                     candidates[i].curve.size(), contractible ? "contractible" : "non-contractible");
+                     candidates[i].curve.size(), contractible ? "null-homologous" : "essential");
       if (contractible) continue;
       out = std::move(candidates[i].curve);
       out_path = std::move(path);
