@@ -33,7 +33,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <unordered_map>
-#include <unordered_set>
 
 #include "chokeloops/complex.h"
 #include "chokeloops/shorten.h"
@@ -339,7 +338,9 @@ class LoopTracer {
     }
 
     // Label the surface vertices on the crossing edges by their region end.
-    std::unordered_map<int, std::int8_t> vertex_label;
+    // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.
+    std::vector<std::int8_t> vertex_label(S_.vertices.size(), 0);
+    std::vector<int> labelled;
     for (const Node& x : shore) {
       std::array<int, 3> gp{lo[0] + x.p[0], lo[1] + x.p[1], lo[2] + x.p[2]};
       for (int nb = 0; nb < 14; ++nb) {
@@ -347,15 +348,19 @@ class LoopTracer {
         Id u = x.v + cx_.neighbor_delta(nb);
         if (region(u)) continue;
         int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
-        if (sv >= 0) vertex_label[sv] = label[x.li];
+        if (sv >= 0) {
+          if (vertex_label[sv] == 0) labelled.push_back(sv);
+          vertex_label[sv] = label[x.li];
+        }
       }
     }
 
     // Interface segments on faces whose vertices carry both labels; chain them into curves.
-    std::unordered_set<int> faces;
-    for (auto& kv : vertex_label)
-      for (int q = A_.vf_start[kv.first]; q < A_.vf_start[kv.first + 1]; ++q) faces.insert(A_.vf[q]);
-    std::vector<int> sorted_faces(faces.begin(), faces.end());
+    std::vector<char> face_seen(S_.faces.size(), 0);
+    std::vector<int> sorted_faces;
+    for (int v : labelled)
+      for (int q = A_.vf_start[v]; q < A_.vf_start[v + 1]; ++q)
+        if (!face_seen[A_.vf[q]]) face_seen[A_.vf[q]] = 1, sorted_faces.push_back(A_.vf[q]);
     std::sort(sorted_faces.begin(), sorted_faces.end());
     auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
     std::vector<std::array<std::int64_t, 2>> segments;
@@ -364,8 +369,7 @@ class LoopTracer {
       std::array<std::int8_t, 3> l;
       bool unknown = false;
       for (int q = 0; q < 3; ++q) {
-        auto it = vertex_label.find(F[q]);
-        l[q] = it == vertex_label.end() ? 0 : it->second;
+        l[q] = vertex_label[F[q]];
         unknown |= l[q] == 0;
       }
       if (unknown || (l[0] == l[1] && l[1] == l[2])) continue;
