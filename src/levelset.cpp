@@ -19,9 +19,11 @@
 #include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include "chokeloops/vdb_io.h"
+#include "chokeloops/winding_number.h"
 
 namespace chokeloops {
 
@@ -33,7 +35,7 @@ struct Site {
 };
 // levelset_edt.cpp: vertices not `known` get sign * distance to the closest point of their nearest site
 void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
-                                   const std::vector<Site>& sites);
+                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site = nullptr);
 }  // namespace detail
 
 namespace {
@@ -186,6 +188,65 @@ openvdb::FloatGrid::Ptr extend_to_box(openvdb::FloatGrid::Ptr sdf, const openvdb
   return out ? out : sdf;
 }
 
+// Sign of an open mesh's grid by the generalised winding number w (inside: |w| > 1/2, either
+// orientation). w is evaluated at every site (band vertex) only; any other vertex x takes its nearest
+// site s's side, flipped when x and s lie on opposite sides of their common surface point p
+// ((x - p) . (s - p) < 0). Where that is not clear-cut (the two directions more than 60 degrees from
+// parallel or antiparallel, e.g. around the rim of a hole), w is evaluated at x itself.
+// Returns how many vertices needed their own evaluation.
+std::size_t sign_by_winding_number(ScalarGrid& g, const std::vector<std::int32_t>& nearest,
+                                   const std::vector<detail::Site>& sites, const TriangleMesh& mesh,
+                                   const openvdb::Coord& b0) {
+  const WindingNumber wn(mesh);
+  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
+  const double h = g.voxel_size;
+  auto inside_at = [&](double i, double j, double k) {  // grid coordinates relative to b0
+    return std::abs(wn({(b0[0] + i) * h, (b0[1] + j) * h, (b0[2] + k) * h})) > 0.5;
+  };
+  auto vertex_ijk = [&](std::int64_t v, int* ijk) {
+    ijk[0] = int(v % nx);
+    ijk[1] = int((v / nx) % ny);
+    ijk[2] = int(v / (std::int64_t(nx) * ny));
+  };
+  std::vector<std::uint8_t> site_inside(sites.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sites.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t s = r.begin(); s != r.end(); ++s) {
+      int c[3];
+      vertex_ijk(sites[s].vertex, c);
+      site_inside[s] = inside_at(c[0], c[1], c[2]);
+    }
+  });
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, nz), std::size_t(0),
+      [&](const tbb::blocked_range<int>& r, std::size_t direct) {
+        for (int k = r.begin(); k != r.end(); ++k)
+          for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) {
+              const std::size_t idx = std::size_t(g.index(i, j, k));
+              const std::int32_t s = nearest[idx];
+              if (s < 0) continue;
+              const detail::Site& site = sites[std::size_t(s)];
+              int c[3];
+              vertex_ijk(site.vertex, c);
+              const double a[3] = {i - site.p[0], j - site.p[1], k - site.p[2]};
+              const double b[3] = {c[0] - site.p[0], c[1] - site.p[1], c[2] - site.p[2]};
+              const double aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2], bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+              const double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+              bool inside;
+              if (aa > 1e-8 && bb > 1e-8 && std::abs(ab) >= 0.5 * std::sqrt(aa * bb)) {
+                inside = (ab > 0) == bool(site_inside[std::size_t(s)]);
+              } else {
+                inside = inside_at(i, j, k);
+                ++direct;
+              }
+              const float v = std::abs(g.values[idx]);
+              g.values[idx] = inside ? -v : v;
+            }
+        return direct;
+      },
+      std::plus<std::size_t>());
+}
+
 void count_sides(LevelSetResult& r) {
   const auto& v = r.grid.values;
   r.inside_voxels = tbb::parallel_reduce(
@@ -283,7 +344,8 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
       index_box(lo - openvdb::Vec3d(margin), hi + openvdb::Vec3d(margin), h, who);
   check_memory(box, o, h, longest, who);
 
-  // exact distance in a narrow band (OpenVDB closest-point transform, sign by its flood fill),
+  // exact distance in a narrow band (OpenVDB closest-point transform, sign by its flood fill, or by the
+  // winding number when holes remain),
   // then the rest of the box from the band's closest points (exact feature transform).
   stage.restart();
   auto xf = openvdb::math::Transform::createLinearTransform(h);
@@ -292,9 +354,9 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
     pts[i] = openvdb::Vec3d(m.vertices[i][0] / h, m.vertices[i][1] / h, m.vertices[i][2] / h);
   IndexMeshAdapter adapter{&pts, &m.faces};
   const float band = kBandVoxels;
-  // Keep OpenVDB's intersecting-voxel removal (it makes the sign robust); skip its renormalisation and
-  // trimming, which only change band values that the feature transform recomputes anyway.
-  const int flags = openvdb::tools::DISABLE_RENORMALIZATION | openvdb::tools::DISABLE_NARROW_BAND_TRIMMING;
+  // All of OpenVDB's clean-up stays on: intersecting-voxel removal and renormalisation both decide signs
+  // (without renormalisation bunny_npm and david at 256 gain a spurious handle: ManifestMeshes tests).
+  const int flags = 0;
   openvdb::Int32Grid index_grid(openvdb::Int32(openvdb::util::INVALID_IDX));
   openvdb::FloatGrid::Ptr sdf =
       openvdb::tools::meshToVolume<openvdb::FloatGrid>(adapter, *xf, band, band, flags, &index_grid);
@@ -324,8 +386,20 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
       sites.push_back({idx, {float(p[0] - b0[0]), float(p[1] - b0[1]), float(p[2] - b0[2])}});
     }
     stage.done("sites");
-    detail::complete_by_feature_transform(g, known, sites);
+    // OpenVDB's sign leaks through holes that repair left open: those take the winding number's
+    const bool open = res.report.boundary_edges_remaining > 0;
+    std::vector<std::int32_t> nearest;
+    detail::complete_by_feature_transform(g, known, sites, open ? &nearest : nullptr);
     stage.done("far field (feature transform)");
+    if (open && !sites.empty()) {
+      const std::size_t direct = sign_by_winding_number(g, nearest, sites, m, b0);
+      std::ostringstream s;
+      s << who << ": " << res.report.boundary_edges_remaining
+        << " boundary edges remain open: inside/outside from the generalised winding number (|w| > 1/2; "
+        << sites.size() << " band vertices and " << direct << " others evaluated)";
+      res.warnings.push_back(s.str());
+      stage.done("sign (winding number)");
+    }
   }
   sdf.reset();
   index_grid.clear();

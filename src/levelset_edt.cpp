@@ -75,8 +75,9 @@ void envelope_line(int n, float* f, std::int32_t* id, std::vector<int>& v, std::
 
 // grid.values: signed values (only the sign is used where not known); `known[i]` = keep as is
 // (empty: recompute every vertex); sites: see above.
+// nearest_site (optional): receives each vertex's chosen site (-1 where none).
 void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
-                                   const std::vector<Site>& sites) {
+                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const std::size_t N = std::size_t(grid.vertex_count());
   if (sites.empty()) return;
@@ -229,6 +230,7 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
       grid.values[idx] = float(grid.values[idx] < 0 ? -d : d);
     }
   });
+  if (nearest_site) nearest_site->swap(F);
 }
 
 }  // namespace chokeloops::detail
