@@ -311,12 +311,17 @@ class LoopTracer {
       double d = handle ? (double(f) - fs) : (fs - double(f));  // grows from the saddle toward the surface
       return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
     };
-    std::vector<std::vector<Node>> buckets(bucket_of(0.0f) + 2);
-    for (const Node& x : seeds) buckets[0].push_back(x);
+    // The queue holds local indices only (4 bytes, not a 24-byte Node): a big box queues millions.
+    auto node_of = [&](std::uint32_t li) {
+      const int k = int(li / lz), rest = int(li % lz);
+      return node_at({rest % n[0], rest / n[0], k});
+    };
+    std::vector<std::vector<std::uint32_t>> buckets(bucket_of(0.0f) + 2);
+    for (const Node& x : seeds) buckets[0].push_back(x.li);
     std::vector<Node> shore;
     for (std::size_t b = 0; b < buckets.size(); ++b) {
       for (std::size_t q = 0; q < buckets[b].size(); ++q) {
-        Node x = buckets[b][q];
+        const Node x = node_of(buckets[b][q]);
         std::int8_t lx = label[x.li];
         bool at_shore = false;
         for_neighbours(x, [&](const Node& u) {
@@ -325,16 +330,16 @@ class LoopTracer {
           if (l == 0) {
             l = lx;
             if (!by_distance) {
-              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u);
+              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u.li);
             } else {
               if (b + 1 == buckets.size()) buckets.emplace_back();
-              buckets[b + 1].push_back(u);
+              buckets[b + 1].push_back(u.li);
             }
           }
         });
         if (at_shore) shore.push_back(x);
       }
-      std::vector<Node>().swap(buckets[b]);
+      std::vector<std::uint32_t>().swap(buckets[b]);
     }
 
     // Label the surface vertices on the crossing edges by their region end.
