@@ -17,14 +17,14 @@ bool is_vdb(const std::string& path) {
   return path.size() >= 4 && path.compare(path.size() - 4, 4, ".vdb") == 0;
 }
 
-// Surface genus at a given resolution, for the genus guard.
-int surface_genus_at(const std::string& input, LevelSetOptions options, int resolution) {
+// Surface genus and components at a given resolution, for the genus guard.
+SurfaceStats surface_stats_at(const std::string& input, LevelSetOptions options, int resolution) {
   options.resolution = resolution;
   options.voxel_size = 0;
   options.quiet = true;
   options.keep_vdb = false;
   LevelSetResult ls = make_levelset(input, options);
-  return surface_stats(extract_zero_surface(ls.grid)).genus;
+  return surface_stats(extract_zero_surface(ls.grid));
 }
 }  // namespace
 
@@ -103,11 +103,15 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
     ls_options.voxel_size = 0;
     LevelSetResult probe = make_levelset(input, [&] { auto o = ls_options; o.resolution = 64; return o; }());
     input_genus = probe.report.closed ? probe.report.genus : -1;
+    const int input_components = int(probe.report.components);
     resolution = 64;
     if (input_genus >= 0) {
+      // The genus alone can match by accident: on Neptune at 80 thin parts break off (7 components) and
+      // the genus happens to be right; the components must match too.
       for (int res = 64; res <= 1024; res = int(res * 1.25)) {
         resolution = res;
-        if (surface_genus_at(input, ls_options, res) == input_genus) break;
+        SurfaceStats st = surface_stats_at(input, ls_options, res);
+        if (st.genus == input_genus && st.components == input_components) break;
       }
     } else {
       resolution = options.levelset.resolution;
@@ -136,7 +140,7 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
       for (double factor : {1.5, 2.25}) {
         int res = int(resolution * factor);
         if (estimate_levelset_bytes(std::size_t(double(voxels) * factor * factor * factor)) > budget) break;
-        if (surface_genus_at(input, ls_options, res) == input_genus) { hint = "--resolution " + std::to_string(res); break; }
+        if (surface_stats_at(input, ls_options, res).genus == input_genus) { hint = "--resolution " + std::to_string(res); break; }
       }
     }
     warnings.push_back("the grid is too coarse: the input mesh has genus " + std::to_string(input_genus) +
