@@ -162,3 +162,23 @@ TEST(AnalyzeMeshes, CoarseGridSaysSoAndNamesAResolution) {
     EXPECT_EQ(analyze(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/genus3_directional.off", o).surface_stats.genus, 3);
   }
 }
+
+TEST(AnalyzeMeshes, ResolutionAutoKeepsGenusAndComponents) {
+  // The coarsest grid (64, x1.25 steps) whose surface has the input's genus and components, and no coarser.
+  const std::string file = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/genus3_directional.off";
+  AnalyzeOptions o;
+  o.resolution_auto = true;
+  AnalyzeResult r = analyze(file, o);
+  ASSERT_EQ(r.input_genus, 3);
+  EXPECT_EQ(r.surface_stats.genus, 3);
+  EXPECT_EQ(r.surface_stats.components, 1);
+  EXPECT_GE(r.resolution, 64);
+  EXPECT_LE(r.resolution, 256);
+  EXPECT_EQ(r.chokes.handle_generators, 3);
+  if (r.resolution > 64) {
+    AnalyzeOptions coarser;
+    coarser.levelset.resolution = int(r.resolution / 1.25);
+    AnalyzeResult c = analyze(file, coarser);
+    EXPECT_TRUE(c.surface_stats.genus != 3 || c.surface_stats.components != 1) << "resolution " << coarser.levelset.resolution;
+  }
+}
