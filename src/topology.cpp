@@ -40,6 +40,7 @@ struct SurfaceTopology::Impl {
   std::vector<std::int64_t> euler;  // per component: V - E + F
   std::vector<char> closed;         // per component: every edge has two faces
   std::mutex cgal_lock;
+  int cgal_queries = 0;  // guarded by cgal_lock
   struct Component {
     std::unique_ptr<SM> sm;
     std::unique_ptr<CST> cst;
@@ -109,12 +110,18 @@ SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& a
     : impl_(std::make_unique<Impl>(mesh, &adjacency)) {}
 SurfaceTopology::~SurfaceTopology() = default;
 
+int SurfaceTopology::cgal_queries() const {
+  std::lock_guard<std::mutex> hold(impl_->cgal_lock);
+  return impl_->cgal_queries;
+}
+
 int SurfaceTopology::component_of_vertex(int v) const { return impl_->vertex_label.at(size_t(v)); }
 
 bool SurfaceTopology::contractible(const std::vector<int>& loop) {
   impl_->check(loop);
   if (loop.size() < 3) return true;  // a point or an edge traversed back and forth
   std::lock_guard<std::mutex> hold(impl_->cgal_lock);
+  ++impl_->cgal_queries;
   auto& C = impl_->component(impl_->vertex_label[loop[0]]);
   Path p(*C.sm);
   for (size_t i = 0; i < loop.size(); ++i) {
@@ -143,7 +150,8 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
     cut.insert(key(loop[i], loop[(i + 1) % loop.size()]));
     on_loop[loop[i]] = 1;
   }
-  const int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  if (h0 < 0) h0 = adj.halfedge(mesh, loop[1], loop[0]);  // the loop runs against the faces' orientation
   const int t0 = h0 < 0 ? -1 : adj.twin[h0];
   if (t0 < 0) return contractible(loop);
   // side[f]: 0 unseen, 1 or 2 the side of the loop whose flood reached f first.
@@ -195,7 +203,8 @@ bool SurfaceTopology::null_homologous(const std::vector<int>& loop) {
     parity[key(loop[i], loop[(i + 1) % loop.size()])] ^= 1;
     on_loop[loop[i]] = 1;
   }
-  const int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  if (h0 < 0) h0 = adj.halfedge(mesh, loop[1], loop[0]);  // the loop runs against the faces' orientation
   if (h0 < 0) return contractible(loop);
   std::vector<signed char> colour(mesh.faces.size(), -1);
   std::vector<int> queue{MeshAdjacency::face(h0)};

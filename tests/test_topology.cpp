@@ -123,6 +123,17 @@ TEST(Topology, FastContractibilityAgreesWithCgal) {
     EXPECT_EQ(topo.separates(c.loop), c.separates);
     EXPECT_EQ(topo.null_homologous(c.loop), c.separates);  // for a simple loop: null in Z/2 iff it separates
   }
+  // Simple loops are decided by the floods alone, whichever way they run along the faces' orientation.
+  SurfaceTopology floods(m);
+  for (auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    std::vector<int> reversed(c.loop.rbegin(), c.loop.rend());
+    for (const auto* loop : {&c.loop, &reversed}) {
+      EXPECT_EQ(floods.contractible_fast(*loop), c.contractible);
+      EXPECT_EQ(floods.null_homologous(*loop), c.separates);
+    }
+  }
+  EXPECT_EQ(floods.cgal_queries(), 0);
   // A sphere's equator (separating, both sides disks) and a loop on a hollow ball's inner sphere.
   auto s = cube_surface(48, analytic::ball(0.3));
   SurfaceTopology ts(s);

@@ -40,6 +40,8 @@ class SurfaceTopology {
   // closed component, one face flood; a loop that is not null is non-contractible. On a component with
   // boundary it answers contractible() instead (a sufficient condition only).
   bool null_homologous(const std::vector<int>& loop);
+  // How many contractibility queries CGAL answered so far (the others were decided by face floods).
+  int cgal_queries() const;
   // Removing the loop's edges splits the loop's component into more face-connected parts.
   bool separates(const std::vector<int>& loop);
   // Component (face_components numbering) that holds vertex v, -1 for an isolated vertex.
