@@ -214,8 +214,8 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
       });
     }
   };
-  // Measured max error deep inside at 128^3 (sphere / torus, band 2): one round 0.35 / 0.28 voxel, two
-  // rounds 0.29 / 0.24 for ~0.4 s more at 256 (bunny); the bar is 1 voxel.
+  // Measured max error deep inside at 128^3 (sphere / torus, band 3): one round 0.34 / 0.23 voxel, two
+  // rounds 0.25 / 0.19 for ~0.4 s more at 256 (bunny); the bar is 1 voxel.
   const int rounds = 1;
   for (int round = 0; round < rounds; ++round)
     for (int axis = 0; axis < 3; ++axis)
