@@ -1,0 +1,41 @@
+# CHOKELOOPS_SANITIZE=ON: only the input stage (mesh/.vdb reading, repair, level set, winding number), a
+# `chokeloops` CLI with just the `levelset` command, and a test binary of the input tests, all under
+# AddressSanitizer + UBSan. The full library's CGAL-heavy analysis files did not finish compiling in
+# 25 min with ASan on the 2-core machine, and the bad-input suite needs none of them.
+# Included from the top CMakeLists.txt, which then stops (no other targets in a sanitizer build).
+
+set(CHOKELOOPS_SANITIZE_FLAGS -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer)
+set(CHOKELOOPS_INPUT_SOURCES
+  ${PROJECT_SOURCE_DIR}/src/levelset.cpp
+  ${PROJECT_SOURCE_DIR}/src/levelset_edt.cpp
+  ${PROJECT_SOURCE_DIR}/src/levelset_repair.cpp
+  ${PROJECT_SOURCE_DIR}/src/mesh_io.cpp
+  ${PROJECT_SOURCE_DIR}/src/vdb_io.cpp)
+if(EXISTS ${PROJECT_SOURCE_DIR}/src/winding_number.cpp)
+  list(APPEND CHOKELOOPS_INPUT_SOURCES ${PROJECT_SOURCE_DIR}/src/winding_number.cpp)
+endif()
+add_library(chokeloops_input STATIC ${CHOKELOOPS_INPUT_SOURCES})
+target_include_directories(chokeloops_input PUBLIC ${PROJECT_SOURCE_DIR}/include PRIVATE ${PROJECT_SOURCE_DIR}/src)
+target_compile_definitions(chokeloops_input PUBLIC CHOKELOOPS_VERSION="${PROJECT_VERSION}"
+  CHOKELOOPS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_compile_options(chokeloops_input PUBLIC ${CHOKELOOPS_SANITIZE_FLAGS})
+target_link_options(chokeloops_input PUBLIC -fsanitize=address,undefined)
+target_link_libraries(chokeloops_input PUBLIC TBB::tbb OpenVDB::openvdb Eigen3::Eigen CGAL::CGAL)
+
+add_executable(chokeloops ${PROJECT_SOURCE_DIR}/tools/main.cpp ${PROJECT_SOURCE_DIR}/tools/cmd_levelset.cpp
+  ${PROJECT_SOURCE_DIR}/tools/args.cpp ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
+target_link_libraries(chokeloops PRIVATE chokeloops_input)
+
+enable_testing()
+find_package(GTest REQUIRED)
+file(GLOB CHOKELOOPS_INPUT_TESTS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/test_bad_input.cpp
+  ${PROJECT_SOURCE_DIR}/tests/test_levelset_*.cpp ${PROJECT_SOURCE_DIR}/tests/test_winding_number.cpp)
+add_executable(chokeloops_input_tests ${CHOKELOOPS_INPUT_TESTS} ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
+target_include_directories(chokeloops_input_tests PRIVATE ${PROJECT_SOURCE_DIR}/src ${PROJECT_SOURCE_DIR}/tests)
+target_link_libraries(chokeloops_input_tests PRIVATE chokeloops_input GTest::gtest GTest::gtest_main)
+target_compile_definitions(chokeloops_input_tests PRIVATE
+  CHOKELOOPS_CLI="$<TARGET_FILE:chokeloops>"
+  CHOKELOOPS_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data")
+add_dependencies(chokeloops_input_tests chokeloops)
+include(GoogleTest)
+gtest_discover_tests(chokeloops_input_tests DISCOVERY_TIMEOUT 300 PROPERTIES TIMEOUT 1800)
