@@ -288,7 +288,7 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
       s << "; filled " << r.holes_filled << " of them (CGAL triangulate_hole), the sign comes from the filled surface";
     if (r.boundary_edges_remaining > 0)
       s << "; " << r.boundary_edges_remaining
-        << " boundary edges remain open; the sign comes from OpenVDB's flood fill and may be wrong near them";
+        << " boundary edges remain open";
     out.warnings.push_back(s.str());
   }
 

@@ -30,7 +30,7 @@ const char* kUsage =
     "  --iso V               iso value for fog/density .vdb input (default 0.5)\n"
     "  --grid NAME           which grid of a .vdb input (default: the first float grid)\n"
     "  --max-memory BYTES    refuse grids needing more (e.g. 8G, 512M; default 80% of physical memory)\n"
-    "  --no-fill-holes       do not close holes of open meshes (sign then from OpenVDB flood fill)\n"
+    "  --no-fill-holes       do not close holes of open meshes (sign then from the winding number)\n"
     "  -q, --quiet           print only warnings and errors\n"
     "  -h, --help            this help\n"
     "\n"
