@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "chokeloops/mesh_adjacency.h"
@@ -25,6 +26,20 @@ SurfaceStats surface_stats_at(const std::string& input, LevelSetOptions options,
   options.keep_vdb = false;
   LevelSetResult ls = make_levelset(input, options);
   return surface_stats(extract_zero_surface(ls.grid));
+}
+
+// A self-intersecting mesh bounds a solid whose surface need not have the mesh's genus: no grid recovers
+// it. Asked only when the genus differs (CGAL's test costs ~0.3 s per 100K faces).
+std::string self_intersection_note(const std::string& input) {
+  try {
+    MeshRepairOptions o;
+    o.check_self_intersections = true;
+    RepairedMesh m = repair_mesh(read_mesh(input), input, o);
+    if (m.report.self_intersecting)
+      return "; note that the input intersects itself, and the solid it bounds need not have the mesh's genus";
+  } catch (const std::exception&) {
+  }
+  return "";
 }
 }  // namespace
 
@@ -98,23 +113,54 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   int resolution = ls_options.voxel_size > 0 ? 0 : ls_options.resolution;
   std::vector<std::string> warnings;
   int input_genus = -1;
+  std::string auto_failure;  // set when --resolution auto finds no grid that keeps the input's topology
   if (options.resolution_auto && !is_vdb(input)) {
-    // The coarsest grid whose surface keeps the closed input's genus, from 64 voxels up.
+    // The coarsest grid whose surface keeps the closed input's genus and components, from 64 voxels up to
+    // 1024 or the largest grid that fits in memory, whichever comes first.
     ls_options.voxel_size = 0;
     LevelSetResult probe = make_levelset(input, [&] { auto o = ls_options; o.resolution = 64; return o; }());
     input_genus = probe.report.closed ? probe.report.genus : -1;
     const int input_components = int(probe.report.components);
-    resolution = 64;
+    resolution = options.levelset.resolution;
     if (input_genus >= 0) {
-      // The genus alone can match by accident: on Neptune at 80 thin parts break off (7 components) and
-      // the genus happens to be right; the components must match too.
+      const std::size_t budget = ls_options.max_memory ? ls_options.max_memory : default_max_memory();
+      const double probe_voxels = double(probe.grid.values.size());
+      int finest = 0;
+      SurfaceStats finest_stats;
+      bool found = false;
+      bool memory_bound = false;
       for (int res = 64; res <= 1024; res = int(res * 1.25)) {
-        resolution = res;
+        // The box grows as the cube of the resolution (the margin is a fixed fraction of the object).
+        const double f = double(res) / 64.0;
+        if (estimate_levelset_bytes(std::size_t(probe_voxels * f * f * f)) > budget) {
+          memory_bound = true;
+          break;
+        }
+        // The genus alone can match by accident: on Neptune at 80 thin parts break off (7 components) and
+        // the genus happens to be right; the components must match too.
         SurfaceStats st = surface_stats_at(input, ls_options, res);
-        if (st.genus == input_genus && st.components == input_components) break;
+        finest = res;
+        finest_stats = st;
+        if (st.genus == input_genus && st.components == input_components) {
+          found = true;
+          break;
+        }
       }
-    } else {
-      resolution = options.levelset.resolution;
+      if (finest == 0) finest = 64;
+      resolution = finest;
+      if (!found) {
+        const double voxel = probe.grid.voxel_size * 64.0 / finest;
+        char h[32];
+        std::snprintf(h, sizeof h, "%.4g", voxel);
+        auto_failure = "--resolution auto: no grid up to " + std::to_string(finest) + " voxels (" +
+                       (memory_bound ? "the largest that fits in memory" : "the search's limit") +
+                       ") keeps the input's genus " + std::to_string(input_genus) + " and " +
+                       std::to_string(input_components) + " component(s); at " + std::to_string(finest) +
+                       " the surface has genus " + std::to_string(finest_stats.genus) + " and " +
+                       std::to_string(finest_stats.components) +
+                       " component(s), so the input has handles, tunnels or gaps thinner than " + h +
+                       " (the voxel there)";
+      }
     }
     ls_options.resolution = resolution;
   }
@@ -130,7 +176,9 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   r.resolution = resolution;
   r.timings_ms["levelset"] = levelset_ms;
   for (auto& w : r.levelset_info.warnings) warnings.push_back(w);
-  if (input_genus >= 0 && r.surface_stats.genus != input_genus) {
+  if (!auto_failure.empty()) {
+    warnings.push_back(auto_failure + self_intersection_note(input));
+  } else if (input_genus >= 0 && r.surface_stats.genus != input_genus) {
     // Never a silently different genus: find and name a resolution that keeps it.
     // Two finer grids at most (x1.5, x2.25), and only those that fit in memory.
     std::string hint = "a finer --resolution (or --resolution auto)";
@@ -145,7 +193,7 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
     }
     warnings.push_back("the grid is too coarse: the input mesh has genus " + std::to_string(input_genus) +
                        " but its surface at this resolution has genus " + std::to_string(r.surface_stats.genus) +
-                       "; rerun with " + hint);
+                       "; rerun with " + hint + self_intersection_note(input));
   }
   warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
   r.warnings = warnings;

@@ -165,8 +165,9 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
   const std::string who = "'" + name + "'";
 
   // Fast path: a closed, consistently oriented, edge-manifold triangle mesh without repeated indices
-  // needs no repair (OpenVDB's conversion does not depend on the orientation); skip CGAL entirely.
-  {
+  // needs no repair (OpenVDB's conversion does not depend on the orientation); skip CGAL entirely, unless
+  // asked for self-intersections, which need CGAL's structure.
+  if (!options.check_self_intersections) {
     bool clean = !mesh.faces.empty();
     std::unordered_map<std::uint64_t, int> directed;
     directed.reserve(mesh.faces.size() * 4);

@@ -20,7 +20,7 @@ const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
 INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
   --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
-                            a closed input mesh's genus
+                            a closed input mesh's genus and components (up to 1024 or --max-memory)
   --voxel-size H            voxel size in input units (instead of --resolution)
   --margin M                padding around the object, input units (default: 10% of its longest side)
   --dmax X                  how deep/far to look for additional loops: percentage of R_in (handles) /
