@@ -158,6 +158,6 @@ int main(int argc, char** argv) {
     if (!std::filesystem::exists(m.file)) { std::printf("| %-10s | missing %s |\n", m.name.c_str(), m.file.c_str()); continue; }
     run_model(m, runs, resolution);
   }
-  std::filesystem::remove(tangle);
+  if (!std::getenv("CHOKELOOPS_KEEP_TANGLE")) std::filesystem::remove(tangle);
   return 0;
 }
