@@ -18,6 +18,8 @@ using namespace chokeloops;
 namespace {
 
 struct ManifestMesh { std::string file; int genus; };
+// Names the parameter in ctest output (instead of its bytes).
+void PrintTo(const ManifestMesh& m, std::ostream* os) { *os << m.file << " (genus " << m.genus << ")"; }
 
 std::vector<ManifestMesh> closed_manifest_meshes() {
   std::vector<ManifestMesh> out;

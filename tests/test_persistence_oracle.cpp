@@ -102,6 +102,8 @@ std::string case_name(const Case& c) {
   return "n" + std::to_string(c.dims[0]) + "x" + std::to_string(c.dims[1]) + "x" + std::to_string(c.dims[2]) + "_" +
          kind_name(c.kind) + "_s" + std::to_string(c.seed);
 }
+// Names the parameter in ctest output (instead of its bytes).
+void PrintTo(const Case& c, std::ostream* os) { *os << case_name(c); }
 
 std::vector<OraclePair> convert(const std::vector<PersistencePair>& v) {
   std::vector<OraclePair> out;
