@@ -318,29 +318,63 @@ class LoopTracer {
     };
     std::vector<std::vector<std::uint32_t>> buckets(bucket_of(0.0f) + 2);
     for (const Node& x : seeds) buckets[0].push_back(x.li);
-    std::vector<Node> shore;
+    // The flood is memory-bound (perf: the label and grid reads). Vertices off the box's border visit
+    // their 14 neighbours by fixed local offsets, without decoding coordinates or checking bounds, and
+    // read the box's values from a local copy made in memory order; a bit in the label marks the border,
+    // where the checked path runs. Same neighbour order either way: same labels.
+    constexpr std::int8_t kBorder = 4, kLabel = 3;
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j) {
+        std::int8_t* row = label.data() + ly * std::size_t(j) + lz * std::size_t(k);
+        if (k == 0 || j == 0 || k == n[2] - 1 || j == n[1] - 1) {
+          for (int i = 0; i < n[0]; ++i) row[i] |= kBorder;
+        } else {
+          row[0] |= kBorder;
+          row[n[0] - 1] |= kBorder;
+        }
+      }
+    std::vector<float> box_values;
+    if (!by_distance) {
+      box_values.resize(lz * n[2]);
+      for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+          std::copy_n(f_ + base + gy * j + gz * k, n[0], box_values.data() + ly * std::size_t(j) + lz * std::size_t(k));
+    }
+    std::array<std::int64_t, 14> local_delta;
+    for (int k = 0; k < 14; ++k)
+      local_delta[k] = offsets[k][0] + std::int64_t(ly) * offsets[k][1] + std::int64_t(lz) * offsets[k][2];
+    std::vector<std::uint32_t> shore_local;
     for (std::size_t b = 0; b < buckets.size(); ++b) {
       for (std::size_t q = 0; q < buckets[b].size(); ++q) {
-        const Node x = node_of(buckets[b][q]);
-        std::int8_t lx = label[x.li];
+        const std::uint32_t xl = buckets[b][q];
+        const std::int8_t lx = label[xl] & kLabel;
         bool at_shore = false;
-        for_neighbours(x, [&](const Node& u) {
-          std::int8_t& l = label[u.li];
-          if (l == kOutside) { at_shore = true; return; }
-          if (l == 0) {
-            l = lx;
+        auto visit = [&](std::uint32_t ul) {
+          std::int8_t& l = label[ul];
+          const std::int8_t lu = l & kLabel;
+          if (lu == kOutside) { at_shore = true; return; }
+          if (lu == 0) {
+            l = std::int8_t((l & kBorder) | lx);
             if (!by_distance) {
-              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(f_[u.v])))].push_back(u.li);
+              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(box_values[ul])))].push_back(ul);
             } else {
               if (b + 1 == buckets.size()) buckets.emplace_back();
-              buckets[b + 1].push_back(u.li);
+              buckets[b + 1].push_back(ul);
             }
           }
-        });
-        if (at_shore) shore.push_back(x);
+        };
+        if (label[xl] & kBorder) {
+          for_neighbours(node_of(xl), [&](const Node& u) { visit(u.li); });
+        } else {
+          for (int k = 0; k < 14; ++k) visit(std::uint32_t(std::int64_t(xl) + local_delta[k]));
+        }
+        if (at_shore) shore_local.push_back(xl);
       }
       std::vector<std::uint32_t>().swap(buckets[b]);
     }
+    std::vector<Node> shore;
+    shore.reserve(shore_local.size());
+    for (std::uint32_t xl : shore_local) shore.push_back(node_of(xl));
 
     // Label the surface vertices on the crossing edges by their region end.
     // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.
@@ -355,7 +389,7 @@ class LoopTracer {
         int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
         if (sv >= 0) {
           if (vertex_label[sv] == 0) labelled.push_back(sv);
-          vertex_label[sv] = label[x.li];
+          vertex_label[sv] = std::int8_t(label[x.li] & kLabel);
         }
       }
     }
