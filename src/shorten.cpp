@@ -11,6 +11,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include <tbb/parallel_for.h>
+
 #include "chokeloops/topology.h"
 
 namespace chokeloops {
@@ -234,7 +236,7 @@ struct Shortener {
     }
   }
   // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices.
-  std::vector<int> shortest_loop_through(int s, double& length) {
+  std::vector<int> shortest_loop_through(int s, double& length) const {
     const int NL = 7, L0 = 3;  // sheets -3..3
     const int n = int(band.global.size());
     std::vector<double> d(size_t(n) * NL, std::numeric_limits<double>::infinity());
@@ -743,12 +745,15 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     for (int i = 0; i < samples && !cv.empty(); ++i) starts.push_back(cv[size_t(i) * cv.size() / samples]);
     std::sort(starts.begin() + 1, starts.end());
     starts.erase(std::unique(starts.begin() + 1, starts.end()), starts.end());
-    for (int st : starts) {
-      if (st < 0) continue;
-      double L;
-      auto P = sh.shortest_loop_through(st, L);
-      if (!P.empty() && L < best_len - 1e-12) best = P, best_len = L, s = st;
-    }
+    // The searches are independent (they only read the band): run them in parallel, then pick in the
+    // sequential order, so the choice does not depend on the thread count.
+    std::vector<std::vector<int>> paths(starts.size());
+    std::vector<double> lengths(starts.size(), std::numeric_limits<double>::infinity());
+    tbb::parallel_for(std::size_t(0), starts.size(), [&](std::size_t i) {
+      if (starts[i] >= 0) paths[i] = sh.shortest_loop_through(starts[i], lengths[i]);
+    });
+    for (std::size_t i = 0; i < starts.size(); ++i)
+      if (!paths[i].empty() && lengths[i] < best_len - 1e-12) best = paths[i], best_len = lengths[i], s = starts[i];
     if (!best.empty()) {
       double acc = 0;
       for (size_t i = 0; i + 1 < best.size(); ++i) {
