@@ -50,14 +50,16 @@ struct LevelSetResult {
 // Throws Error (exit 2 bad input, exit 3 not enough memory: the message names a --resolution that fits).
 LevelSetResult make_levelset(const std::string& input_path, const LevelSetOptions& options = {});
 
-// Repairs the mesh (repair_mesh) and converts it: exact closest-point distance (OpenVDB mesh-to-volume)
-// for the whole inside and an exterior band covering the padding; remaining far voxels of the box
-// (deep concavities, box corners) by OpenVDB fast sweeping from the exact band.
+// Repairs the mesh (repair_mesh) and converts it: OpenVDB mesh-to-volume gives an exact band of closest
+// points (and the sign, or the winding number where holes remain); an exact feature transform from those
+// closest points gives every other vertex of the padded box its distance.
 LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions& options = {},
                                 const std::string& name = "mesh");
 
-// A FloatGrid from a .vdb: level set used as is when |grad phi| ~ 1 near the surface, renormalised
-// (fast sweeping) otherwise; fog volume → signed distance at options.iso. Extended to the padded box.
+// A FloatGrid from a .vdb: a level set is used as is when |grad phi| ~ 1 near the surface, otherwise
+// redistanced from its zero crossings; a fog volume becomes a signed distance at options.iso (fogToSdf).
+// What the input does not cover of the padded box gets the exact feature transform's distance to the
+// zero crossings.
 LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr grid, const LevelSetOptions& options = {},
                                  const std::string& name = "grid");
 
