@@ -28,6 +28,12 @@ SurfaceStats surface_stats_at(const std::string& input, LevelSetOptions options,
   return surface_stats(extract_zero_surface(ls.grid));
 }
 
+// Whether a level set of `voxels` vertices fits in the budget make_levelset will enforce.
+bool levelset_fits(double voxels, const LevelSetOptions& options) {
+  const std::size_t budget = options.max_memory ? options.max_memory : default_max_memory();
+  return estimate_levelset_bytes(std::size_t(voxels)) <= budget;
+}
+
 // A self-intersecting mesh bounds a solid whose surface need not have the mesh's genus: no grid recovers
 // it. Asked only when the genus differs (CGAL's test costs ~0.3 s per 100K faces).
 std::string self_intersection_note(const std::string& input) {
@@ -123,7 +129,6 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
     const int input_components = int(probe.report.components);
     resolution = options.levelset.resolution;
     if (input_genus >= 0) {
-      const std::size_t budget = ls_options.max_memory ? ls_options.max_memory : default_max_memory();
       const double probe_voxels = double(probe.grid.values.size());
       int finest = 0;
       SurfaceStats finest_stats;
@@ -132,7 +137,7 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
       for (int res = 64; res <= 1024; res = int(res * 1.25)) {
         // The box grows as the cube of the resolution (the margin is a fixed fraction of the object).
         const double f = double(res) / 64.0;
-        if (estimate_levelset_bytes(std::size_t(probe_voxels * f * f * f)) > budget) {
+        if (!levelset_fits(probe_voxels * f * f * f, ls_options)) {
           memory_bound = true;
           break;
         }
@@ -183,11 +188,10 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
     // Two finer grids at most (x1.5, x2.25), and only those that fit in memory.
     std::string hint = "a finer --resolution (or --resolution auto)";
     if (resolution > 0) {
-      std::size_t budget = ls_options.max_memory ? ls_options.max_memory : default_max_memory();
-      std::size_t voxels = r.grid.values.size();
+      const double voxels = double(r.grid.values.size());
       for (double factor : {1.5, 2.25}) {
         int res = int(resolution * factor);
-        if (estimate_levelset_bytes(std::size_t(double(voxels) * factor * factor * factor)) > budget) break;
+        if (!levelset_fits(voxels * factor * factor * factor, ls_options)) break;
         if (surface_stats_at(input, ls_options, res).genus == input_genus) { hint = "--resolution " + std::to_string(res); break; }
       }
     }

@@ -557,8 +557,9 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
   }
   bool fog = input->getGridClass() == openvdb::GRID_FOG_VOLUME;
   if (input->getGridClass() == openvdb::GRID_UNKNOWN) fog = !(vmin < 0 && vmax > 0);
-  openvdb::FloatGrid::Ptr sdf;
-  bool redistance = false;
+  // What the box's values come from: fogToSdf's band, or the input itself (read only).
+  openvdb::FloatGrid::ConstPtr sdf;
+  bool redistance = false;  // the input's values are not distances: only their signs are used
   if (fog) {
     if (!(vmin < o.iso && vmax > o.iso)) {
       std::ostringstream s;
@@ -573,11 +574,11 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
     std::size_t sampled = 0;
     const double frac = eikonal_fraction(*input, &sampled);
     if (sampled >= 10 && frac >= 0.8) {
-      sdf = input->deepCopy();
+      sdf = input;
       res.source = "vdb level set";
     } else {
       redistance = true;
-      sdf = input->deepCopy();  // only its signs are used
+      sdf = input;
       res.source = "vdb level set (renormalised)";
       std::ostringstream s;
       s << who << ": values are not a true distance (" << int(frac * 100) << "% of " << sampled
@@ -586,7 +587,6 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
     }
   }
   if (!sdf || sdf->activeVoxelCount() == 0) throw Error(who + ": conversion to a signed distance produced an empty grid");
-  sdf->setGridClass(openvdb::GRID_LEVEL_SET);
   const openvdb::CoordBBox sb = redistance ? crossing_bbox(*sdf) : surface_bbox(*sdf);
   if (sb.empty()) throw Error(who + ": no surface (zero crossing) found in the grid");
   const double longest = double(std::max({sb.dim()[0], sb.dim()[1], sb.dim()[2]})) * h;
@@ -605,17 +605,15 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
     box.expand(active);
   }
   check_memory(box, o, h, longest, who);
-  if (redistance) {
-    res.grid = dense_from_grid(*sdf, box, who);
-    redistance_from_signs(res.grid);
-    if (o.keep_vdb) res.vdb = grid_from_dense(res.grid, true);
-  } else {
-    // A narrow band (or fogToSdf's band) keeps its distances; the rest of the box gets the exact feature
-    // transform's distance to the band's zero crossings (OpenVDB's fast sweeping, used before, was 1.2
-    // voxels off on a sphere's far field; this is 0.5: LevelSetVdbInput tests).
-    res.grid = dense_from_grid(*sdf, box, who);
-    std::vector<std::uint8_t> known(res.grid.values.size(), 0);
-    std::size_t known_count = 0;
+  // Voxels where sdf holds a distance (a narrow band, fogToSdf's band, a dense distance grid) keep it; the
+  // rest of the box, all of it when the values are not distances, gets the exact feature transform's
+  // distance to the zero crossings (OpenVDB's fast sweeping, used before, was 1.2 voxels off on a sphere's
+  // far field; this is under 0.5: LevelSetVdbInput tests).
+  res.grid = dense_from_grid(*sdf, box, who);
+  std::vector<std::uint8_t> known;
+  std::size_t known_count = 0;
+  if (!redistance) {
+    known.assign(res.grid.values.size(), 0);
     const openvdb::Coord b0 = box.min();
     for (auto it = sdf->tree().cbeginValueOn(); it; ++it) {
       openvdb::CoordBBox bb = it.getBoundingBox();
@@ -629,10 +627,12 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
             kn = 1;
           }
     }
-    if (known_count < known.size()) redistance_from_signs(res.grid, known);
-    if (o.keep_vdb) res.vdb = known_count < known.size() ? grid_from_dense(res.grid, true) : sdf;
   }
-  if (res.vdb) res.vdb->setName(input->getName().empty() ? "sdf" : input->getName());
+  if (known_count < res.grid.values.size()) redistance_from_signs(res.grid, known);
+  if (o.keep_vdb) {
+    res.vdb = grid_from_dense(res.grid, true);
+    res.vdb->setName(input->getName().empty() ? "sdf" : input->getName());
+  }
   count_sides(res);
   res.seconds = since(t0);
   emit_warnings(res, o);
