@@ -27,15 +27,8 @@ add_executable(chokeloops ${PROJECT_SOURCE_DIR}/tools/main.cpp ${PROJECT_SOURCE_
 target_link_libraries(chokeloops PRIVATE chokeloops_input)
 
 enable_testing()
-find_package(GTest REQUIRED)
+include(${PROJECT_SOURCE_DIR}/cmake/test_binary.cmake)
 file(GLOB CHOKELOOPS_INPUT_TESTS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/tests/test_bad_input.cpp
   ${PROJECT_SOURCE_DIR}/tests/test_levelset_*.cpp ${PROJECT_SOURCE_DIR}/tests/test_winding_number.cpp)
-add_executable(chokeloops_input_tests ${CHOKELOOPS_INPUT_TESTS} ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
-target_include_directories(chokeloops_input_tests PRIVATE ${PROJECT_SOURCE_DIR}/src ${PROJECT_SOURCE_DIR}/tests)
-target_link_libraries(chokeloops_input_tests PRIVATE chokeloops_input GTest::gtest GTest::gtest_main)
-target_compile_definitions(chokeloops_input_tests PRIVATE
-  CHOKELOOPS_CLI="$<TARGET_FILE:chokeloops>"
-  CHOKELOOPS_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data")
-add_dependencies(chokeloops_input_tests chokeloops)
-include(GoogleTest)
-gtest_discover_tests(chokeloops_input_tests DISCOVERY_TIMEOUT 300 PROPERTIES TIMEOUT 1800)
+chokeloops_add_test_binary(chokeloops_input_tests chokeloops_input 300 1800
+  ${CHOKELOOPS_INPUT_TESTS} ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
