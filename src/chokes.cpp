@@ -41,6 +41,10 @@ std::array<double, 3> centroid(const ScalarGrid& grid, const FreudenthalComplex&
   return c;
 }
 
+void keep_stronger(std::array<double, 2>& best, const Choke& c) {
+  if (c.persistence > best[1] || (c.persistence == best[1] && c.depth < best[0])) best = {c.depth, c.persistence};
+}
+
 }  // namespace
 
 ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, const ChokeParameters& params) {
@@ -98,9 +102,10 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
       c.saddle = p.death_vertex;
       c.lobes = p.death_lobes;
       out.handle_diagram.push_back({c.depth, c.persistence});
-      if (params.handles && c.depth <= out.d_max_handle && c.persistence >= out.min_persistence_handle &&
-          c.persistence > 0)
-        out.chokes.push_back(c);
+      if (params.handles && c.depth <= out.d_max_handle && c.persistence > 0) {
+        if (c.persistence >= out.min_persistence_handle) out.chokes.push_back(c);
+        else keep_stronger(out.strongest_filtered_handle, c);
+      }
     } else if (p.dim == 2 && b > 0) {
       c.side = Side::Tunnel;
       c.kind = Kind::Choke;
@@ -111,9 +116,10 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
       c.saddle = p.birth_vertex;
       c.lobes = p.birth_lobes;
       out.tunnel_diagram.push_back({c.depth, c.persistence});
-      if (params.tunnels && c.depth <= out.d_max_tunnel && c.persistence >= out.min_persistence_tunnel &&
-          c.persistence > 0)
-        out.chokes.push_back(c);
+      if (params.tunnels && c.depth <= out.d_max_tunnel && c.persistence > 0) {
+        if (c.persistence >= out.min_persistence_tunnel) out.chokes.push_back(c);
+        else keep_stronger(out.strongest_filtered_tunnel, c);
+      }
     } else if (p.dim == 0 && b <= 0 && d >= 0) {
       ++out.gaps;
     } else if (p.dim == 2 && b <= 0 && d > 0) {

@@ -83,6 +83,12 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
   for (auto& p : r.chokes.handle_diagram) hd.push_back({p[0], p[1]});
   for (auto& p : r.chokes.tunnel_diagram) td.push_back({p[0], p[1]});
   j["diagram"] = {{"handle", hd}, {"tunnel", td}};
+  auto filtered = [](const std::array<double, 2>& c, double scale) {
+    if (c[1] <= 0) return json(nullptr);
+    return json{{"depth", c[0]}, {"persistence", c[1]}, {"persistence_percent", scale > 0 ? 100 * c[1] / scale : 0}};
+  };
+  j["strongest_filtered"] = {{"handle", filtered(r.chokes.strongest_filtered_handle, r.chokes.R_in)},
+                             {"tunnel", filtered(r.chokes.strongest_filtered_tunnel, r.chokes.R_out)}};
   j["warnings"] = r.warnings;
   json timings = json::object();
   for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;

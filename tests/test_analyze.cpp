@@ -163,6 +163,27 @@ TEST(AnalyzeAnalytic, DumbbellHasOneNeckLoop) {
   expect_valid_loops(r);
 }
 
+TEST(AnalyzeAnalytic, ANeckBelowMinPersistenceIsReportedAsTheStrongestFiltered) {
+  // The neck (depth 0.12, balls 0.2) lives ~40% of R_in: kept at 30%; filtered at 50% but then named as
+  // the strongest filtered candidate, with the kept choke's depth and persistence.
+  ScalarGrid grid = sample_field({96, 96, 96}, analytic::dumbbell(), {0, 0, 0}, {1, 1, 1});
+  PersistenceDiagram diagram = lower_star_persistence(grid);
+  ChokeParameters kept, filtered;
+  kept.d_max = filtered.d_max = Threshold::parse("75%");
+  kept.min_persistence = Threshold::parse("30%");
+  filtered.min_persistence = Threshold::parse("50%");
+  ChokeSet with = find_chokes(grid, diagram, kept), without = find_chokes(grid, diagram, filtered);
+  ASSERT_EQ(with.chokes.size(), 1u);
+  EXPECT_NEAR(with.chokes[0].depth, 0.12, 2 * grid.voxel_size);
+  EXPECT_TRUE(without.chokes.empty());
+  EXPECT_DOUBLE_EQ(without.strongest_filtered_handle[0], with.chokes[0].depth);
+  EXPECT_DOUBLE_EQ(without.strongest_filtered_handle[1], with.chokes[0].persistence);
+  // With the neck kept, what is filtered is sampling noise, far weaker than the neck.
+  EXPECT_GT(with.strongest_filtered_handle[1], 0.0);
+  EXPECT_LT(with.strongest_filtered_handle[1], 0.25 * with.chokes[0].persistence);
+  EXPECT_LT(without.strongest_filtered_tunnel[1], 0.1 * without.R_out);  // no pocket outside the dumbbell
+}
+
 TEST(AnalyzeAnalytic, DoubleTorusHasTwoPlusTwoGenerators) {
   AnalyzeResult r = run(analytic::double_torus(), 128, {0, 0, 0}, {1, 1, 1});
   EXPECT_EQ(r.surface_stats.genus, 2);

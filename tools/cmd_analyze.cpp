@@ -1,6 +1,7 @@
 // `chokeloops analyze INPUT -o OUTDIR`: every stage, the report files, the viewer page and a summary.
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -125,6 +126,17 @@ int run(std::vector<std::string> args) {
               options.chokes.d_max.text().c_str(), r.chokes.d_max_handle, r.chokes.d_max_tunnel,
               options.chokes.min_persistence.text().c_str(), r.chokes.min_persistence_handle,
               r.chokes.min_persistence_tunnel);
+  // Persistence is sampled: a loop just under the threshold may appear on another grid. Say how close it is.
+  auto filtered = [](const char* side, const std::array<double, 2>& c, double scale, const char* scale_name) {
+    if (c[1] <= 0) return std::string();
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s %.4g (%.3g%% of %s) at depth %.4g", side, c[1], 100 * c[1] / scale, scale_name, c[0]);
+    return std::string(buf);
+  };
+  std::string fh = filtered("handle", r.chokes.strongest_filtered_handle, r.chokes.R_in, "R_in");
+  std::string ft = filtered("tunnel", r.chokes.strongest_filtered_tunnel, r.chokes.R_out, "R_out");
+  if (!fh.empty() || !ft.empty())
+    std::printf("strongest below min persistence: %s%s%s\n", fh.c_str(), !fh.empty() && !ft.empty() ? ", " : "", ft.c_str());
   std::printf("time: levelset %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, check %.0f ms, report %.0f ms, total %.0f ms\n",
               r.timings_ms["levelset"], r.timings_ms["persistence"], r.timings_ms["surface"], r.timings_ms["loops"],
               r.timings_ms["check"], report_ms, r.timings_ms["total"] + report_ms);

@@ -52,6 +52,10 @@ struct ChokeSet {
   int components = 0;                  // components of the solid (essential class + gaps)
   int gaps = 0;                        // dim-0 pairs b < 0 <= d: separate parts meeting outside
   int sealed_cavities = 0;             // dim-2 pairs b <= 0 < d
+  // Per side, the most persistent additional candidate that d_max admits but min_persistence filters out
+  // ({depth, persistence}; persistence 0: none). Persistence is sampled, so a loop near the threshold can
+  // come and go with the grid; this says how far the threshold is from the next loop.
+  std::array<double, 2> strongest_filtered_handle{0, 0}, strongest_filtered_tunnel{0, 0};
   // Every candidate point (depth, persistence) of each side, for persistence diagrams.
   std::vector<std::array<double, 2>> handle_diagram, tunnel_diagram;
 };
