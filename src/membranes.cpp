@@ -242,17 +242,36 @@ class LoopTracer {
         fn(node_at(q));
       }
     };
-    // label: 0 not reached yet, 1 or 2 the zone, kOutside beyond the region. Marking the region once, in
-    // memory order, spares the flood a scattered read of the grid for each of a vertex's 14 neighbours
-    // (that read was a third of the loop stage on fertility).
-    constexpr std::int8_t kOutside = 3;
-    std::vector<std::int8_t> label(lz * n[2], 0);
+    // One 32-bit word per box vertex, written once in memory order: its zone (bits 0-1: 0 not reached
+    // yet, 1 or 2, kOutside beyond the region), a border bit, and its level in the flood (bits 3-31). The
+    // flood is memory-bound (perf: the reads of a newly met neighbour's zone and value were two cache
+    // misses, two thirds of its time); one word makes it one, and spares a scattered read of the grid.
+    constexpr std::uint32_t kZone = 3, kOutside = 3, kBorder = 4;
+    constexpr int kLevelShift = 3;
+    const double level = g_.voxel_size / 64;
+    const double fs = f_[s];
+    // Flood levels (a bucket queue), quantised to 1/64 voxel; 0 for everything on the seeds' side of the saddle.
+    auto bucket_of = [&](float f) {
+      double d = handle ? (double(f) - fs) : (fs - double(f));  // grows from the saddle toward the surface
+      return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
+    };
+    const std::size_t last_bucket = bucket_of(0.0f) + 1;
+    if (last_bucket >= (std::size_t(1) << (32 - kLevelShift))) throw Error("membrane flood: choke too deep for the level queue");
+    std::vector<std::uint32_t> cell(lz * n[2]);
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j) {
         const float* row = f_ + base + gy * j + gz * k;
-        std::int8_t* out = label.data() + ly * std::size_t(j) + lz * std::size_t(k);
-        for (int i = 0; i < n[0]; ++i) out[i] = (handle ? row[i] <= 0 : row[i] > 0) ? 0 : kOutside;
+        std::uint32_t* out = cell.data() + ly * std::size_t(j) + lz * std::size_t(k);
+        const bool border_row = k == 0 || j == 0 || k == n[2] - 1 || j == n[1] - 1;
+        for (int i = 0; i < n[0]; ++i) {
+          const bool inside = handle ? row[i] <= 0 : row[i] > 0;
+          std::uint32_t w = inside ? std::uint32_t(std::min(last_bucket, bucket_of(row[i]))) << kLevelShift : kOutside;
+          if (border_row || i == 0 || i == n[0] - 1) w |= kBorder;
+          out[i] = w;
+        }
       }
+    auto zone = [&](std::uint32_t li) { return cell[li] & kZone; };
+    auto set_zone = [&](std::uint32_t li, std::uint32_t z) { cell[li] = (cell[li] & ~kZone) | z; };
 
     // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
     // choke's depth; around a handle they join farther away, which the flood below must not see.
@@ -283,9 +302,8 @@ class LoopTracer {
       }
       if (stack.empty()) return Attempt::Grow;
       for (const Node& x : stack) {
-        std::int8_t& l = label[x.li];
-        if (l == 2 - side) return Attempt::Shrink;
-        l = std::int8_t(side + 1);
+        if (zone(x.li) == std::uint32_t(2 - side)) return Attempt::Shrink;
+        set_zone(x.li, std::uint32_t(side + 1));
       }
       while (!stack.empty()) {
         Node x = stack.back();
@@ -294,52 +312,27 @@ class LoopTracer {
         bool joined = false;
         for_neighbours(x, [&](const Node& u) {
           if (!below(u.v) || !in_seed_box(u.p)) return;
-          std::int8_t& l = label[u.li];
-          if (l == 0) { l = std::int8_t(side + 1); stack.push_back(u); }
-          else if (l != side + 1) joined = true;
+          const std::uint32_t l = zone(u.li);
+          if (l == 0) { set_zone(u.li, std::uint32_t(side + 1)); stack.push_back(u); }
+          else if (l != std::uint32_t(side + 1)) joined = true;
         });
         if (joined) return Attempt::Shrink;
       }
     }
 
-    // Priority flood through the solid (the outside, for tunnels) in filtration order, quantised to 1/64
-    // voxel levels (a bucket queue: O(1) per vertex; first in, first out within a level, so the
-    // result is deterministic); remember the labelled vertices next to the surface.
-    const double level = g_.voxel_size / 64;
-    const double fs = f_[s];
-    auto bucket_of = [&](float f) {
-      double d = handle ? (double(f) - fs) : (fs - double(f));  // grows from the saddle toward the surface
-      return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
-    };
+    // Priority flood through the solid (the outside, for tunnels) in filtration order, by the levels above
+    // (O(1) per vertex; first in, first out within a level, so the result is deterministic); remember the
+    // labelled vertices next to the surface.
     // The queue holds local indices only (4 bytes, not a 24-byte Node): a big box queues millions.
     auto node_of = [&](std::uint32_t li) {
       const int k = int(li / lz), rest = int(li % lz);
       return node_at({rest % n[0], rest / n[0], k});
     };
-    std::vector<std::vector<std::uint32_t>> buckets(bucket_of(0.0f) + 2);
+    std::vector<std::vector<std::uint32_t>> buckets(last_bucket + 1);
     for (const Node& x : seeds) buckets[0].push_back(x.li);
-    // The flood is memory-bound (perf: the label and grid reads). Vertices off the box's border visit
-    // their 14 neighbours by fixed local offsets, without decoding coordinates or checking bounds, and
-    // read the box's values from a local copy made in memory order; a bit in the label marks the border,
-    // where the checked path runs. Same neighbour order either way: same labels.
-    constexpr std::int8_t kBorder = 4, kLabel = 3;
-    for (int k = 0; k < n[2]; ++k)
-      for (int j = 0; j < n[1]; ++j) {
-        std::int8_t* row = label.data() + ly * std::size_t(j) + lz * std::size_t(k);
-        if (k == 0 || j == 0 || k == n[2] - 1 || j == n[1] - 1) {
-          for (int i = 0; i < n[0]; ++i) row[i] |= kBorder;
-        } else {
-          row[0] |= kBorder;
-          row[n[0] - 1] |= kBorder;
-        }
-      }
-    std::vector<float> box_values;
-    if (!by_distance) {
-      box_values.resize(lz * n[2]);
-      for (int k = 0; k < n[2]; ++k)
-        for (int j = 0; j < n[1]; ++j)
-          std::copy_n(f_ + base + gy * j + gz * k, n[0], box_values.data() + ly * std::size_t(j) + lz * std::size_t(k));
-    }
+    // Vertices off the box's border visit their 14 neighbours by fixed local offsets, without decoding
+    // coordinates or checking bounds; the border bit sends the others down the checked path. Same
+    // neighbour order either way: same labels.
     std::array<std::int64_t, 14> local_delta;
     for (int k = 0; k < 14; ++k)
       local_delta[k] = offsets[k][0] + std::int64_t(ly) * offsets[k][1] + std::int64_t(lz) * offsets[k][2];
@@ -347,23 +340,23 @@ class LoopTracer {
     for (std::size_t b = 0; b < buckets.size(); ++b) {
       for (std::size_t q = 0; q < buckets[b].size(); ++q) {
         const std::uint32_t xl = buckets[b][q];
-        const std::int8_t lx = label[xl] & kLabel;
+        const std::uint32_t lx = cell[xl] & kZone;
         bool at_shore = false;
         auto visit = [&](std::uint32_t ul) {
-          std::int8_t& l = label[ul];
-          const std::int8_t lu = l & kLabel;
+          std::uint32_t& w = cell[ul];
+          const std::uint32_t lu = w & kZone;
           if (lu == kOutside) { at_shore = true; return; }
           if (lu == 0) {
-            l = std::int8_t((l & kBorder) | lx);
+            w |= lx;
             if (!by_distance) {
-              buckets[std::max(b, std::min(buckets.size() - 1, bucket_of(box_values[ul])))].push_back(ul);
+              buckets[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
             } else {
               if (b + 1 == buckets.size()) buckets.emplace_back();
               buckets[b + 1].push_back(ul);
             }
           }
         };
-        if (label[xl] & kBorder) {
+        if (cell[xl] & kBorder) {
           for_neighbours(node_of(xl), [&](const Node& u) { visit(u.li); });
         } else {
           for (int k = 0; k < 14; ++k) visit(std::uint32_t(std::int64_t(xl) + local_delta[k]));
@@ -389,7 +382,7 @@ class LoopTracer {
         int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
         if (sv >= 0) {
           if (vertex_label[sv] == 0) labelled.push_back(sv);
-          vertex_label[sv] = std::int8_t(label[x.li] & kLabel);
+          vertex_label[sv] = std::int8_t(zone(x.li));
         }
       }
     }
