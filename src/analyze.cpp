@@ -18,14 +18,17 @@ bool is_vdb(const std::string& path) {
   return path.size() >= 4 && path.compare(path.size() - 4, 4, ".vdb") == 0;
 }
 
-// Surface genus and components at a given resolution, for the genus guard.
-SurfaceStats surface_stats_at(const std::string& input, LevelSetOptions options, int resolution) {
+LevelSetResult levelset_at(const std::string& input, LevelSetOptions options, int resolution) {
   options.resolution = resolution;
   options.voxel_size = 0;
   options.quiet = true;
   options.keep_vdb = false;
-  LevelSetResult ls = make_levelset(input, options);
-  return surface_stats(extract_zero_surface(ls.grid));
+  return make_levelset(input, options);
+}
+
+// Surface genus and components at a given resolution, for the genus guard.
+SurfaceStats surface_stats_at(const std::string& input, const LevelSetOptions& options, int resolution) {
+  return surface_stats(extract_zero_surface(levelset_at(input, options, resolution).grid));
 }
 
 // Whether a level set of `voxels` vertices fits in the budget make_levelset will enforce.
@@ -120,16 +123,19 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   std::vector<std::string> warnings;
   int input_genus = -1;
   std::string auto_failure;  // set when --resolution auto finds no grid that keeps the input's topology
+  // The search's last grid is the one analysed: kept rather than made again (Neptune: 2 s at 472).
+  LevelSetResult searched;
+  auto t = Clock::now();
   if (options.resolution_auto && !is_vdb(input)) {
     // The coarsest grid whose surface keeps the closed input's genus and components, from 64 voxels up to
     // 1024 or the largest grid that fits in memory, whichever comes first.
     ls_options.voxel_size = 0;
-    LevelSetResult probe = make_levelset(input, [&] { auto o = ls_options; o.resolution = 64; return o; }());
+    LevelSetResult probe = levelset_at(input, ls_options, 64);
     input_genus = probe.report.closed ? probe.report.genus : -1;
     const int input_components = int(probe.report.components);
     resolution = options.levelset.resolution;
     if (input_genus >= 0) {
-      const double probe_voxels = double(probe.grid.values.size());
+      const double probe_voxels = double(probe.grid.values.size()), probe_voxel_size = probe.grid.voxel_size;
       int finest = 0;
       SurfaceStats finest_stats;
       bool found = false;
@@ -143,7 +149,13 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
         }
         // The genus alone can match by accident: on Neptune at 80 thin parts break off (7 components) and
         // the genus happens to be right; the components must match too.
-        SurfaceStats st = surface_stats_at(input, ls_options, res);
+        if (res == 64) {
+          searched = std::move(probe);
+        } else {
+          searched = LevelSetResult{};  // one grid at a time
+          searched = levelset_at(input, ls_options, res);
+        }
+        SurfaceStats st = surface_stats(extract_zero_surface(searched.grid));
         finest = res;
         finest_stats = st;
         if (st.genus == input_genus && st.components == input_components) {
@@ -151,10 +163,13 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
           break;
         }
       }
-      if (finest == 0) finest = 64;
+      if (finest == 0) {  // not even 64 fits the memory budget: make_levelset below refuses it with the fix
+        finest = 64;
+        searched = LevelSetResult{};
+      }
       resolution = finest;
       if (!found) {
-        const double voxel = probe.grid.voxel_size * 64.0 / finest;
+        const double voxel = probe_voxel_size * 64.0 / finest;
         char h[32];
         std::snprintf(h, sizeof h, "%.4g", voxel);
         auto_failure = "--resolution auto: no grid up to " + std::to_string(finest) + " voxels (" +
@@ -169,8 +184,8 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
     }
     ls_options.resolution = resolution;
   }
-  auto t = Clock::now();
-  LevelSetResult ls = make_levelset(input, ls_options);
+  // With --resolution auto, the level set time is the whole search's.
+  LevelSetResult ls = searched.grid.values.empty() ? make_levelset(input, ls_options) : std::move(searched);
   double levelset_ms = ms_since(t);
   if (!is_vdb(input) && ls.report.closed) input_genus = ls.report.genus;
   ScalarGrid grid = std::move(ls.grid);

@@ -222,6 +222,15 @@ TEST(AnalyzeMeshes, ResolutionAutoKeepsGenusAndComponents) {
     AnalyzeResult c = analyze(file, coarser);
     EXPECT_TRUE(c.surface_stats.genus != 3 || c.surface_stats.components != 1) << "resolution " << coarser.levelset.resolution;
   }
+  // The grid the search kept is the one a run at that resolution makes.
+  AnalyzeOptions direct;
+  direct.levelset.resolution = r.resolution;
+  AnalyzeResult d = analyze(file, direct);
+  EXPECT_EQ(d.grid.dims, r.grid.dims);
+  EXPECT_EQ(d.grid.values, r.grid.values);
+  EXPECT_EQ(d.surface.vertices.size(), r.surface.vertices.size());
+  ASSERT_EQ(d.loops.size(), r.loops.size());
+  for (std::size_t i = 0; i < d.loops.size(); ++i) EXPECT_EQ(d.loops[i].edge_path, r.loops[i].edge_path);
 }
 
 namespace {
