@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -83,6 +85,36 @@ TEST(CliArgs, ResolutionAcceptsAutoAndIntegers) {
     EXPECT_NE(o.err.find("/nonexistent/in.obj"), std::string::npos) << o.err;
     EXPECT_EQ(o.err.find("--resolution"), std::string::npos) << o.err;
   }
+}
+
+TEST(CliAnalyze, SummaryNamesTheStrongestFilteredCandidate) {
+  // The bunny's neck lives 3.15% of R_in at 128: filtered at 4%, the summary and loops.json name it.
+  const std::string model = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/bunny_libigl.off";
+  if (!fs::exists(model)) GTEST_SKIP() << model << " not found";
+  fs::path out = fs::temp_directory_path() / ("chokeloops_cli_filtered_" + std::to_string(::getpid()));
+  fs::path log = out.string() + ".txt";
+  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' analyze '" + model + "' -o '" + out.string() +
+                    "' --resolution 128 --dmax 75% --min-persistence 4% --side handle --quiet --no-view >'" +
+                    log.string() + "' 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("handle loops: 0 generator(s), 0 choke(s)"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("strongest below min persistence: handle "), std::string::npos) << text.str();
+  EXPECT_EQ(text.str().find("tunnel 0"), std::string::npos) << text.str();  // --side handle
+  std::ifstream js(out / "loops.json");
+  nlohmann::json j = nlohmann::json::parse(js);
+  const double percent = j["strongest_filtered"]["handle"]["persistence_percent"].get<double>();
+  EXPECT_GT(percent, 2.5);
+  EXPECT_LT(percent, 4.0);
+  EXPECT_TRUE(j["strongest_filtered"]["tunnel"].is_null());
+  EXPECT_NEAR(j["strongest_filtered"]["handle"]["depth"].get<double>() / j["scales"]["R_in"].get<double>(), 0.55, 0.03);
+  char printed[32];
+  std::snprintf(printed, sizeof printed, "(%.3g%% of R_in)", percent);
+  EXPECT_NE(text.str().find(printed), std::string::npos) << text.str();
+  fs::remove_all(out);
+  fs::remove(log);
 }
 
 }  // namespace
