@@ -163,10 +163,7 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
           break;
         }
       }
-      if (finest == 0) {  // not even 64 fits the memory budget: make_levelset below refuses it with the fix
-        finest = 64;
-        searched = LevelSetResult{};
-      }
+      if (finest == 0) finest = 64;  // not even 64 fits the budget: make_levelset below refuses it with the fix
       resolution = finest;
       if (!found) {
         const double voxel = probe_voxel_size * 64.0 / finest;

@@ -500,7 +500,7 @@ void redistance_from_signs(ScalarGrid& g, const std::vector<std::uint8_t>& known
           for (int a = 0; a < 3; ++a) {
             const bool has_lo = ijk[a] > 0, has_hi = ijk[a] < dim[a] - 1;
             const float lo = has_lo ? f[v - st[a]] : fv, hi = has_hi ? f[v + st[a]] : fv;
-            grad[a] = double(hi - lo) / double(int(has_lo) + int(has_hi) == 2 ? 2 : std::max(1, int(has_lo) + int(has_hi)));
+            grad[a] = double(hi - lo) / double(std::max(1, int(has_lo) + int(has_hi)));  // central, one-sided at the border
             for (int dir : {-1, 1}) {
               if (dir < 0 ? !has_lo : !has_hi) continue;
               const float fn = dir < 0 ? lo : hi;
