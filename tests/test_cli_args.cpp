@@ -20,20 +20,27 @@ namespace {
 
 struct Outcome {
   int code = -1;
-  std::string err;
+  std::string out, err;
 };
 
+std::string read_and_remove(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  in.close();
+  fs::remove(file);
+  return s.str();
+}
+
 Outcome run_cli(const std::string& args) {
-  fs::path err = fs::temp_directory_path() / ("chokeloops_cli_args_" + std::to_string(::getpid()) + ".txt");
-  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' " + args + " >/dev/null 2>'" + err.string() + "'";
+  const std::string stem = "chokeloops_cli_args_" + std::to_string(::getpid());
+  fs::path out = fs::temp_directory_path() / (stem + ".out"), err = fs::temp_directory_path() / (stem + ".err");
+  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
   int status = std::system(cmd.c_str());
   Outcome o;
   o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err);
-  std::stringstream s;
-  s << in.rdbuf();
-  o.err = s.str();
-  fs::remove(err);
+  o.out = read_and_remove(out);
+  o.err = read_and_remove(err);
   return o;
 }
 
@@ -91,19 +98,16 @@ TEST(CliAnalyze, SummaryNamesTheStrongestFilteredCandidate) {
   // The bunny's neck lives 3.15% of R_in at 128: filtered at 4%, the summary and loops.json name it.
   const std::string model = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/bunny_libigl.off";
   if (!fs::exists(model)) GTEST_SKIP() << model << " not found";
-  fs::path out = fs::temp_directory_path() / ("chokeloops_cli_filtered_" + std::to_string(::getpid()));
-  fs::path log = out.string() + ".txt";
-  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' analyze '" + model + "' -o '" + out.string() +
-                    "' --resolution 128 --dmax 75% --min-persistence 4% --side handle --quiet --no-view >'" +
-                    log.string() + "' 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  std::ifstream in(log);
-  std::stringstream text;
-  text << in.rdbuf();
-  EXPECT_NE(text.str().find("handle loops: 0 generator(s), 0 choke(s)"), std::string::npos) << text.str();
-  EXPECT_NE(text.str().find("strongest below min persistence: handle "), std::string::npos) << text.str();
-  EXPECT_EQ(text.str().find("tunnel 0"), std::string::npos) << text.str();  // --side handle
-  std::ifstream js(out / "loops.json");
+  fs::path dir = fs::temp_directory_path() / ("chokeloops_cli_filtered_" + std::to_string(::getpid()));
+  Outcome o = run_cli("analyze '" + model + "' -o '" + dir.string() +
+                      "' --resolution 128 --dmax 75% --min-persistence 4% --side handle --quiet --no-view");
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("handle loops: 0 generator(s), 0 choke(s)"), std::string::npos) << o.out;
+  const auto at = o.out.find("strongest below min persistence: handle ");
+  ASSERT_NE(at, std::string::npos) << o.out;
+  const std::string line = o.out.substr(at, o.out.find('\n', at) - at);
+  EXPECT_EQ(line.find("tunnel"), std::string::npos) << line;  // --side handle
+  std::ifstream js(dir / "loops.json");
   nlohmann::json j = nlohmann::json::parse(js);
   const double percent = j["strongest_filtered"]["handle"]["persistence_percent"].get<double>();
   EXPECT_GT(percent, 2.5);
@@ -112,9 +116,8 @@ TEST(CliAnalyze, SummaryNamesTheStrongestFilteredCandidate) {
   EXPECT_NEAR(j["strongest_filtered"]["handle"]["depth"].get<double>() / j["scales"]["R_in"].get<double>(), 0.55, 0.03);
   char printed[32];
   std::snprintf(printed, sizeof printed, "(%.3g%% of R_in)", percent);
-  EXPECT_NE(text.str().find(printed), std::string::npos) << text.str();
-  fs::remove_all(out);
-  fs::remove(log);
+  EXPECT_NE(line.find(printed), std::string::npos) << line;
+  fs::remove_all(dir);
 }
 
 }  // namespace
