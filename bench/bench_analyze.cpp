@@ -1,9 +1,9 @@
-// Table 1 of the paper, on this engine: for each of the paper's models found in ../shared/data (and the
+// Table 1 of the paper, on this engine: for each of the paper's models found in data (and the
 // tangle cube made from its implicit equation), the median over --runs runs of every stage of
 // `analyze`, with surface size, grid size, genus g, additional loops k, d_max, delta_min and peak RSS.
 // Each run is its own child process: timings as the CLI sees them, peak RSS per model.
 //
-//   bench_analyze [--runs 5] [--resolution 256] [--data ../shared/data] [--only NAME]
+//   bench_analyze [--runs 5] [--resolution 256] [--data data] [--only NAME]
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "chokeloops/analytic.h"
+#include "chokeloops/field/analytic.h"
 #include "chokeloops/analyze.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/io/vdb_io.h"
 
 using namespace chokeloops;
 
@@ -117,7 +117,7 @@ static void run_model(const Model& m, int runs, int resolution) {
 
 int main(int argc, char** argv) {
   int runs = 5, resolution = 256;
-  std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/../shared/data", only;
+  std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/data", only;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "chokeloops/levelset.h"
+#include "chokeloops/field/levelset.h"
 
 using namespace chokeloops;
 
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> files;
   for (int i = 3; i < argc; ++i) files.push_back(argv[i]);
   if (files.empty()) {
-    const std::string d = std::string(CHOKELOOPS_SOURCE_DIR) + "/../shared/data/meshes/";
+    const std::string d = std::string(CHOKELOOPS_SOURCE_DIR) + "/data/meshes/";
     files = {d + "bunny_libigl.off", d + "armadillo_libigl.obj", d + "fertility_libigl.off", d + "neptune_vmas.off"};
   }
   std::printf("%-24s %9s %16s %10s %10s %12s %10s %10s\n", "mesh", "triangles", "grid", "median s", "min s",

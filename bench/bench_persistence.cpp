@@ -29,8 +29,8 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "chokeloops/analytic.h"
-#include "chokeloops/persistence.h"
+#include "chokeloops/field/analytic.h"
+#include "chokeloops/topology/persistence.h"
 #include "../tests/phat_oracle.h"
 
 using namespace chokeloops;

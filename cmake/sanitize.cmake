@@ -6,13 +6,13 @@
 
 set(CHOKELOOPS_SANITIZE_FLAGS -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer)
 set(CHOKELOOPS_INPUT_SOURCES
-  ${PROJECT_SOURCE_DIR}/src/levelset.cpp
-  ${PROJECT_SOURCE_DIR}/src/levelset_edt.cpp
-  ${PROJECT_SOURCE_DIR}/src/levelset_repair.cpp
-  ${PROJECT_SOURCE_DIR}/src/mesh_io.cpp
-  ${PROJECT_SOURCE_DIR}/src/vdb_io.cpp)
-if(EXISTS ${PROJECT_SOURCE_DIR}/src/winding_number.cpp)
-  list(APPEND CHOKELOOPS_INPUT_SOURCES ${PROJECT_SOURCE_DIR}/src/winding_number.cpp)
+  ${PROJECT_SOURCE_DIR}/src/field/levelset.cpp
+  ${PROJECT_SOURCE_DIR}/src/field/levelset_edt.cpp
+  ${PROJECT_SOURCE_DIR}/src/field/levelset_repair.cpp
+  ${PROJECT_SOURCE_DIR}/src/io/mesh_io.cpp
+  ${PROJECT_SOURCE_DIR}/src/io/vdb_io.cpp)
+if(EXISTS ${PROJECT_SOURCE_DIR}/src/field/winding_number.cpp)
+  list(APPEND CHOKELOOPS_INPUT_SOURCES ${PROJECT_SOURCE_DIR}/src/field/winding_number.cpp)
 endif()
 add_library(chokeloops_input STATIC ${CHOKELOOPS_INPUT_SOURCES})
 target_include_directories(chokeloops_input PUBLIC ${PROJECT_SOURCE_DIR}/include PRIVATE ${PROJECT_SOURCE_DIR}/src)

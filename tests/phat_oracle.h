@@ -23,7 +23,7 @@
 #include <phat/persistence_pairs.h>
 #include <phat/representations/default_representations.h>
 
-#include "chokeloops/complex.h"
+#include "chokeloops/topology/complex.h"
 #include "chokeloops/grid.h"
 
 namespace chokeloops::oracle {

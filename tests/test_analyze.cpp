@@ -11,8 +11,8 @@
 
 #include "analytic_fields.h"
 #include "chokeloops/analyze.h"
-#include "chokeloops/mesh_adjacency.h"
-#include "chokeloops/topology.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/topology.h"
 
 using namespace chokeloops;
 

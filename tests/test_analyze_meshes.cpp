@@ -1,4 +1,4 @@
-// Real meshes (issue 4): every closed mesh of ../shared/data/MANIFEST.tsv gets exactly g handle and g tunnel
+// Real meshes (issue 4): every closed mesh of data/MANIFEST.tsv gets exactly g handle and g tunnel
 // generators and a surface of genus g; the bunny's neck; and a grid too coarse for a genus says so.
 #include <gtest/gtest.h>
 
@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "chokeloops/analyze.h"
-#include "chokeloops/mesh_adjacency.h"
-#include "chokeloops/topology.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/topology.h"
 
 using namespace chokeloops;
 
@@ -23,7 +23,7 @@ void PrintTo(const ManifestMesh& m, std::ostream* os) { *os << m.file << " (genu
 
 std::vector<ManifestMesh> closed_manifest_meshes() {
   std::vector<ManifestMesh> out;
-  std::ifstream in(std::string(CHOKELOOPS_SHARED_DATA) + "/MANIFEST.tsv");
+  std::ifstream in(std::string(CHOKELOOPS_DATA) + "/MANIFEST.tsv");
   std::string line;
   std::getline(in, line);
   while (std::getline(in, line)) {
@@ -60,7 +60,7 @@ TEST_P(ManifestMeshes, GeneratorsMatchTheGenus) {
   AnalyzeOptions o;
   auto finer = kFinerGrid.find(m.file);
   o.levelset.resolution = finer != kFinerGrid.end() ? finer->second : 256;
-  AnalyzeResult r = analyze(std::string(CHOKELOOPS_SHARED_DATA) + "/" + m.file, o);
+  AnalyzeResult r = analyze(std::string(CHOKELOOPS_DATA) + "/" + m.file, o);
   EXPECT_EQ(r.input_genus, m.genus);
   EXPECT_EQ(r.surface_stats.genus, m.genus);
   EXPECT_TRUE(r.surface_stats.closed_manifold);
@@ -147,7 +147,7 @@ AnalyzeResult analyze_bunny(int resolution, const char* min_persistence) {
   o.levelset.resolution = resolution;
   o.chokes.d_max = Threshold::parse("75%");
   o.chokes.min_persistence = Threshold::parse(min_persistence);
-  return analyze(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/bunny_libigl.off", o);
+  return analyze(std::string(CHOKELOOPS_DATA) + "/meshes/bunny_libigl.off", o);
 }
 
 }  // namespace
@@ -185,7 +185,7 @@ TEST(AnalyzeMeshes, BunnyNeckLoopOnAFineGrid) {
 TEST(AnalyzeMeshes, CoarseGridSaysSoAndNamesAResolution) {
   AnalyzeOptions o;
   o.levelset.resolution = 20;
-  AnalyzeResult r = analyze(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/genus3_directional.off", o);
+  AnalyzeResult r = analyze(std::string(CHOKELOOPS_DATA) + "/meshes/genus3_directional.off", o);
   ASSERT_EQ(r.input_genus, 3);
   ASSERT_NE(r.surface_stats.genus, 3);
   bool said = false;
@@ -200,13 +200,13 @@ TEST(AnalyzeMeshes, CoarseGridSaysSoAndNamesAResolution) {
   ASSERT_FALSE(hint.empty());
   if (hint != "auto") {
     o.levelset.resolution = std::stoi(hint);
-    EXPECT_EQ(analyze(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/genus3_directional.off", o).surface_stats.genus, 3);
+    EXPECT_EQ(analyze(std::string(CHOKELOOPS_DATA) + "/meshes/genus3_directional.off", o).surface_stats.genus, 3);
   }
 }
 
 TEST(AnalyzeMeshes, ResolutionAutoKeepsGenusAndComponents) {
   // The coarsest grid (64, x1.25 steps) whose surface has the input's genus and components, and no coarser.
-  const std::string file = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/genus3_directional.off";
+  const std::string file = std::string(CHOKELOOPS_DATA) + "/meshes/genus3_directional.off";
   AnalyzeOptions o;
   o.resolution_auto = true;
   AnalyzeResult r = analyze(file, o);
@@ -245,8 +245,8 @@ TEST(AnalyzeMeshes, SeahorseSaysItsGenusIsOutOfReach) {
   // The seahorse mesh has genus 8, but its handles are a few triangles across and no grid up to 921 keeps
   // more than 2 of them. The run must say so, and what it reports must be consistent with the surface it
   // has: never a silently smaller genus.
-  const std::string file = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/seahorse2_100K_directional.off";
-  if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
+  const std::string file = std::string(CHOKELOOPS_DATA) + "/meshes/seahorse2_100K_directional.off";
+  ASSERT_TRUE(std::filesystem::exists(file)) << "bundled data missing: " << file;
   AnalyzeOptions o;
   o.levelset.resolution = 192;
   AnalyzeResult r = analyze(file, o);

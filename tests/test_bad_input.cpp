@@ -14,9 +14,9 @@
 
 #include <openvdb/io/File.h>
 
-#include "chokeloops/levelset.h"
-#include "chokeloops/mesh_io.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/io/mesh_io.h"
+#include "chokeloops/io/vdb_io.h"
 
 namespace fs = std::filesystem;
 using namespace chokeloops;

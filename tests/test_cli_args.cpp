@@ -96,7 +96,7 @@ TEST(CliArgs, ResolutionAcceptsAutoAndIntegers) {
 
 TEST(CliAnalyze, SummaryNamesTheStrongestFilteredCandidate) {
   // The bunny's neck lives 3.15% of R_in at 128: filtered at 4%, the summary and loops.json name it.
-  const std::string model = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/bunny_libigl.off";
+  const std::string model = std::string(CHOKELOOPS_DATA) + "/meshes/bunny_libigl.off";
   if (!fs::exists(model)) GTEST_SKIP() << model << " not found";
   fs::path dir = fs::temp_directory_path() / ("chokeloops_cli_filtered_" + std::to_string(::getpid()));
   Outcome o = run_cli("analyze '" + model + "' -o '" + dir.string() +

@@ -17,8 +17,8 @@
 #include <openvdb/openvdb.h>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/topology/persistence.h"
+#include "chokeloops/io/vdb_io.h"
 
 using namespace chokeloops;
 namespace fs = std::filesystem;

@@ -8,8 +8,8 @@
 
 #include <tbb/global_control.h>
 
-#include "chokeloops/levelset.h"
-#include "chokeloops/mesh_io.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/io/mesh_io.h"
 
 using namespace chokeloops;
 

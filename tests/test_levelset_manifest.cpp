@@ -1,4 +1,4 @@
-// Every mesh of ../shared/data/MANIFEST.tsv loads and converts at a modest resolution; closed ones
+// Every mesh of data/MANIFEST.tsv loads and converts at a modest resolution; closed ones
 // report the genus listed there; open/messy ones give a warning and a usable grid (issue 3).
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "chokeloops/levelset.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/io/vdb_io.h"
 
 using namespace chokeloops;
 namespace fs = std::filesystem;
@@ -20,7 +20,7 @@ struct Row {
 
 std::vector<Row> manifest_meshes() {
   std::vector<Row> rows;
-  std::ifstream in(std::string(CHOKELOOPS_SHARED_DATA) + "/MANIFEST.tsv");
+  std::ifstream in(std::string(CHOKELOOPS_DATA) + "/MANIFEST.tsv");
   std::string line;
   std::getline(in, line);  // header
   while (std::getline(in, line)) {
@@ -59,7 +59,7 @@ TEST(LevelSetManifest, EveryMeshConvertsAndClosedOnesHaveTheListedGenus) {
     LevelSetOptions o;
     o.resolution = 64;
     o.quiet = true;
-    LevelSetResult res = make_levelset(std::string(CHOKELOOPS_SHARED_DATA) + "/" + r.file, o);
+    LevelSetResult res = make_levelset(std::string(CHOKELOOPS_DATA) + "/" + r.file, o);
     expect_usable(res.grid, r.file);
     EXPECT_GE(res.grid.dims[0], 64 / 2);
     std::printf("%-40s %3dx%3dx%3d closed=%d boundary=%zu nonmanifold=%zu comps=%zu genus=%d warnings=%zu %.2fs\n",
@@ -81,7 +81,7 @@ TEST(LevelSetManifest, OpenScanWarnsAndGivesAUsableGrid) {
   LevelSetOptions o;
   o.resolution = 96;
   o.quiet = true;
-  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/stanford-bunny_scan_ajc.obj", o);
+  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_DATA) + "/meshes/stanford-bunny_scan_ajc.obj", o);
   EXPECT_FALSE(res.report.closed);
   EXPECT_EQ(res.report.boundary_edges, 223u);
   EXPECT_EQ(res.report.holes, 5u);
@@ -92,7 +92,7 @@ TEST(LevelSetManifest, OpenScanWarnsAndGivesAUsableGrid) {
   EXPECT_TRUE(named) << res.warnings.front();
   expect_usable(res.grid, "scan");
   // the scan and the closed libigl bunny are the same shape: inside volumes agree within 5%
-  LevelSetResult ref = make_levelset(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/bunny_libigl.off", o);
+  LevelSetResult ref = make_levelset(std::string(CHOKELOOPS_DATA) + "/meshes/bunny_libigl.off", o);
   const double h3s = std::pow(res.grid.voxel_size, 3), h3r = std::pow(ref.grid.voxel_size, 3);
   EXPECT_NEAR(res.inside_voxels * h3s / (ref.inside_voxels * h3r), 1.0, 0.05);
 }
@@ -101,7 +101,7 @@ TEST(LevelSetManifest, DragonWithDuplicatedFaceWarns) {
   LevelSetOptions o;
   o.resolution = 64;
   o.quiet = true;
-  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/dragon_euclid.ply", o);
+  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_DATA) + "/meshes/dragon_euclid.ply", o);
   ASSERT_FALSE(res.warnings.empty());
   EXPECT_EQ(res.report.nonmanifold_edges + res.report.removed_faces > 0, true);
   expect_usable(res.grid, "dragon");
@@ -112,7 +112,7 @@ TEST(LevelSetManifest, CliWritesAReadableGrid) {
   fs::create_directories(dir);
   const std::string out = (dir / "kitten.vdb").string();
   const std::string cmd = std::string(CHOKELOOPS_CLI) + " levelset '" + CHOKELOOPS_SOURCE_DIR +
-                          "/data/kitten_euclid.off' -o '" + out + "' --resolution 48 > '" + (dir / "log").string() + "'";
+                          "/data/meshes/kitten_euclid.off' -o '" + out + "' --resolution 48 > '" + (dir / "log").string() + "'";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   std::ifstream log(dir / "log");
   std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
@@ -122,7 +122,7 @@ TEST(LevelSetManifest, CliWritesAReadableGrid) {
   LevelSetOptions o;
   o.resolution = 48;
   o.quiet = true;
-  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_SOURCE_DIR) + "/data/kitten_euclid.off", o);
+  LevelSetResult res = make_levelset(std::string(CHOKELOOPS_SOURCE_DIR) + "/data/meshes/kitten_euclid.off", o);
   ASSERT_EQ(g.dims, res.grid.dims);
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.origin[a], res.grid.origin[a], 1e-9);
   EXPECT_EQ(g.values, res.grid.values);

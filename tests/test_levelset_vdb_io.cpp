@@ -8,7 +8,7 @@
 #include <openvdb/io/File.h>
 #include <openvdb/tools/LevelSetSphere.h>
 
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/io/vdb_io.h"
 
 using namespace chokeloops;
 namespace fs = std::filesystem;
@@ -126,7 +126,7 @@ TEST(VdbIo, Errors) {
   fs::remove_all(dir);
 }
 
-#include "chokeloops/levelset.h"
+#include "chokeloops/field/levelset.h"
 
 TEST(LevelSetVdbInput, NarrowBandSphereIsExtendedToThePaddedBox) {
   ensure_openvdb_initialized();

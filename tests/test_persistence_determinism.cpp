@@ -6,7 +6,7 @@
 #include <tbb/global_control.h>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
+#include "chokeloops/topology/persistence.h"
 
 using namespace chokeloops;
 

@@ -15,7 +15,7 @@
 #include <random>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
+#include "chokeloops/topology/persistence.h"
 
 using namespace chokeloops;
 

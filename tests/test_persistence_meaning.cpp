@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
+#include "chokeloops/topology/persistence.h"
 
 using namespace chokeloops;
 

@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
+#include "chokeloops/topology/persistence.h"
 #include "phat_oracle.h"
 
 using namespace chokeloops;

@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "analytic_fields.h"
-#include "chokeloops/persistence.h"
-#include "chokeloops/surface.h"
+#include "chokeloops/topology/persistence.h"
+#include "chokeloops/surface/surface.h"
 
 using namespace chokeloops;
 

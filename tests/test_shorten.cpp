@@ -6,10 +6,10 @@
 #include <cmath>
 
 #include "analytic_fields.h"
-#include "chokeloops/mesh_adjacency.h"
-#include "chokeloops/shorten.h"
-#include "chokeloops/surface.h"
-#include "chokeloops/topology.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/loops/shorten.h"
+#include "chokeloops/surface/surface.h"
+#include "chokeloops/surface/topology.h"
 
 using namespace chokeloops;
 

@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "analytic_fields.h"
-#include "chokeloops/mesh_write.h"
-#include "chokeloops/surface.h"
+#include "chokeloops/output/mesh_write.h"
+#include "chokeloops/surface/surface.h"
 
 using namespace chokeloops;
 

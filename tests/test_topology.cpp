@@ -4,9 +4,9 @@
 #include <cmath>
 
 #include "analytic_fields.h"
-#include "chokeloops/mesh_adjacency.h"
-#include "chokeloops/surface.h"
-#include "chokeloops/topology.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+#include "chokeloops/surface/topology.h"
 
 using namespace chokeloops;
 

@@ -1,4 +1,4 @@
-// view.html and the PNG (include/chokeloops/view.h): the page is opened in headless Chromium by the Node
+// view.html and the PNG (include/chokeloops/output/view.h): the page is opened in headless Chromium by the Node
 // scripts in viewer/tests/ (playwright-core, installed by scripts/build-viewer.sh), the PNG is checked by
 // counting pixels of each loop colour.
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@
 #include <string>
 
 #include "chokeloops/grid.h"
-#include "chokeloops/view.h"
+#include "chokeloops/output/view.h"
 
 namespace fs = std::filesystem;
 using namespace chokeloops;

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "chokeloops/view.h"
+#include "chokeloops/output/view.h"
 
 namespace fs = std::filesystem;
 
@@ -32,7 +32,7 @@ std::string run_cmd(const std::string& cmd, int& code) {
 
 TEST(ViewAnalyze, PngOfAModelShowsEachKindOfLoopItFound) {
   const fs::path viewer = fs::path(CHOKELOOPS_SOURCE_DIR) / "viewer";
-  const fs::path model = fs::path(CHOKELOOPS_SHARED_DATA) / "meshes/kitten_euclid.off";  // genus 1
+  const fs::path model = fs::path(CHOKELOOPS_DATA) / "meshes/kitten_euclid.off";  // genus 1
   if (!fs::exists(model)) GTEST_SKIP() << model << " not found";
   if (chokeloops::find_chromium().empty() || !fs::exists(viewer / "node_modules/pngjs")) {
     if (std::getenv("CHOKELOOPS_ALLOW_NO_BROWSER")) GTEST_SKIP() << "no chromium or viewer/node_modules";

@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "chokeloops/analytic.h"
-#include "chokeloops/mesh_write.h"
-#include "chokeloops/surface.h"
-#include "chokeloops/view.h"
+#include "chokeloops/field/analytic.h"
+#include "chokeloops/output/mesh_write.h"
+#include "chokeloops/surface/surface.h"
+#include "chokeloops/output/view.h"
 
 namespace fs = std::filesystem;
 using namespace chokeloops;

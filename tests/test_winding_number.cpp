@@ -8,9 +8,9 @@
 #include <random>
 #include <string>
 
-#include "chokeloops/levelset.h"
-#include "chokeloops/mesh_io.h"
-#include "chokeloops/winding_number.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/io/mesh_io.h"
+#include "chokeloops/field/winding_number.h"
 
 using namespace chokeloops;
 
@@ -110,8 +110,8 @@ TEST(WindingNumber, OpenSphereKeepsItsInside) {
 }
 
 TEST(WindingNumber, OpenScanWithoutHoleFillingMatchesFilled) {
-  const std::string path = std::string(CHOKELOOPS_SHARED_DATA) + "/meshes/stanford-bunny_scan_ajc.obj";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data missing: " << path;
+  const std::string path = std::string(CHOKELOOPS_DATA) + "/meshes/stanford-bunny_scan_ajc.obj";
+  ASSERT_TRUE(std::filesystem::exists(path)) << "bundled data missing: " << path;
   LevelSetOptions o;
   o.resolution = 64;
   o.quiet = true;

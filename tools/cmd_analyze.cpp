@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "chokeloops/analyze.h"
-#include "chokeloops/view.h"
+#include "chokeloops/output/view.h"
 #include "args.h"
 #include "command.h"
 

@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "chokeloops/grid.h"
-#include "chokeloops/levelset.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/io/vdb_io.h"
 #include "args.h"
 #include "command.h"
 

@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "chokeloops/grid.h"
-#include "chokeloops/persistence.h"
-#include "chokeloops/vdb_io.h"
+#include "chokeloops/topology/persistence.h"
+#include "chokeloops/io/vdb_io.h"
 #include "args.h"
 #include "command.h"
 

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "chokeloops/grid.h"
-#include "chokeloops/view.h"
+#include "chokeloops/output/view.h"
 #include "args.h"
 #include "command.h"
 

@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
-#include "chokeloops/chokes.h"
-#include "chokeloops/levelset.h"
-#include "chokeloops/membranes.h"
-#include "chokeloops/persistence.h"
-#include "chokeloops/surface.h"
+#include "chokeloops/topology/chokes.h"
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/loops/membranes.h"
+#include "chokeloops/topology/persistence.h"
+#include "chokeloops/surface/surface.h"
 
 namespace chokeloops {
 

@@ -1,0 +1,48 @@
+#pragma once
+// Stage `membranes` + `shorten`: from each choke simplex, the loop on the surface.
+//
+// Construction (DESIGN §3, chosen by measurement — see membranes.cpp): a two-lobe priority flood. The two
+// pieces of the sublevel set (superlevel set, for tunnels) that the choke simplex joins seed two labels;
+// the flood grows them through the solid (the outside, for tunnels) in filtration order inside a local box
+// around the choke. The interface of the two zones is the membrane; where it meets the surface is the loop.
+// The loop is then shortened toward a local geodesic without leaving the choke's neighbourhood.
+#include <string>
+#include <vector>
+
+#include "chokeloops/topology/chokes.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+
+namespace chokeloops {
+
+struct LoopOptions {
+  bool shorten = true;
+  bool slide = true;         // after shortening, slide the loop along its normal to the narrowest section
+  double box_factor = 1.5;   // local box half-size = box_factor * depth + box_margin voxels (grown on demand)
+  int box_margin = 3;
+};
+
+struct Loop {
+  Choke choke;
+  bool found = false;              // false: no closed interface curve was found (see note)
+  std::string note;                // why a loop is missing or was left unshortened
+  Polyline3 points;                // closed polyline on the surface (last point != first)
+  std::vector<int> edge_path;      // the same loop snapped to surface vertices (cyclic; for topology checks)
+  double length = 0;               // of `points`, closing segment included
+  double raw_length = 0;           // of the flood interface before shortening
+  std::array<double, 3> centroid{0, 0, 0};
+  std::array<double, 3> normal{0, 0, 0};  // unit normal of the loop's best-fit plane
+  double radius_min = 0, radius_mean = 0;  // distances of the points from the centroid
+  int box_radius = 0;              // half-size in voxels of the box the membrane closed in
+};
+
+class SurfaceTopology;
+
+// Loops of all chokes, computed in parallel; the result does not depend on the thread count. With a
+// topology of `surface`, a generator's loop is chosen among its membrane's interface curves as the nearest
+// one that is non-contractible on the surface (the box grows until one appears); without, the nearest.
+std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                              const std::vector<Choke>& chokes, const LoopOptions& options = {},
+                              SurfaceTopology* topology = nullptr);
+
+}  // namespace chokeloops

@@ -1,0 +1,61 @@
+#pragma once
+// Loop shortening on the surface: moves a closed loop toward a locally shortest (geodesic) loop of its
+// homotopy class without leaving a neighbourhood of where it started (DESIGN §3, paper ref. [19]).
+//
+// Method.
+//  1. Band: the faces whose three vertices lie within `max_rings` edge rings of the loop and (when
+//     max_move > 0) within surface distance max_move of it (the faces touching the loop are always in).
+//     The band must be an annulus (connected, manifold, Euler characteristic 0, two boundary curves) around
+//     which the loop winds once; otherwise the ring count is lowered until it is (0 rings left: the loop is
+//     returned unchanged, `rings` = 0).
+//  2. Shortest edge loop: the band is cut along a dual path from one boundary curve to the other; a
+//     Dijkstra in the (truncated) cyclic cover of the band from a vertex to its lift one sheet up gives the
+//     shortest edge loop through that vertex in the loop's class; repeated from the midpoint of the result
+//     until it stops improving.
+//  3. String pulling: the triangle strip around that edge loop (at each vertex, the fan on the side of
+//     smaller angle) is unfolded and the shortest path through it found by the funnel algorithm, closing
+//     the loop by alternating the cut portal; then wherever the loop bends around a vertex whose angle on
+//     the other side is below pi, the strip is moved to that side and the funnel rerun (iterative shortest
+//     path in a triangle strip). Every step is a homotopy inside the band, so the class is kept.
+//     The funnel's lengths are checked against the polyline actually built from its portal crossings (the
+//     unfolded strip can overlap itself near tiny faces), and a final Gauss-Seidel pass moves each crossing
+//     to the best point of its portal (the length is convex in the crossing parameters).
+// The result is a closed polyline whose points lie on mesh edges (or vertices) of the band, deterministic.
+// Measured: wiggly meridian of a torus (R 0.3, r 0.12, 128^3) 1.298 -> 0.7538 (2*pi*r = 0.7540) in ~0.15 s;
+// the same at 256^3 (826K faces) 0.7563 in ~0.1-0.25 s; varying torus: a loop 0.5 rad from the thinnest
+// section slides there (angle 3.127 vs pi, length 0.5650 vs 0.5655). Thread-safe for concurrent calls on one
+// mesh and adjacency (no shared mutable state). Set CHOKELOOPS_DEBUG_SHORTEN=1 for a trace on stderr.
+#include <vector>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+
+namespace chokeloops {
+
+struct ShortenOptions {
+  double max_move = 0;     // > 0: no point may end farther than this (along mesh edges) from the input loop
+  int max_rings = 12;      // band width in edge rings around the input loop
+  int max_swaps = 5000;    // limit on strip side swaps in step 3
+};
+
+struct ShortenResult {
+  Polyline3 points;               // the shortened closed loop (last point != first)
+  std::vector<int> edge_path;     // step 2's shortest edge loop (cyclic vertex list), or the input loop
+  std::vector<int> strip_faces;   // the triangle strip the final loop runs through (cyclic)
+  double input_length = 0, edge_path_length = 0, length = 0;
+  int rings = 0;                  // band width actually used; 0 when no annulus band was found
+  int swaps = 0;                  // strip side swaps performed
+};
+
+// `loop`: cyclic sequence of surface vertices joined by mesh edges (first vertex not repeated).
+// Throws Error when the loop is not such a sequence.
+ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
+                           const ShortenOptions& options = {});
+ShortenResult shorten_loop(const SurfaceMesh& mesh, const std::vector<int>& loop, const ShortenOptions& options = {});
+
+// A closed polyline on the surface is first snapped to an edge loop (snap_polyline_to_edge_path), then
+// shortened; max_move is measured from the snapped loop.
+ShortenResult shorten_polyline(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
+                               const ShortenOptions& options = {});
+
+}  // namespace chokeloops

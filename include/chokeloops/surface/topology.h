@@ -1,0 +1,78 @@
+#pragma once
+// Topological checks of loops on a SurfaceMesh, used by tests and by the loop stage's self-checks:
+// contractibility (CGAL Surface_mesh_topology, on the connected component that holds the loop) and
+// separation (does cutting along the loop split its component?). A loop is a cyclic sequence of surface
+// vertex indices, consecutive ones (and the last and the first) joined by mesh edges; the first vertex is
+// not repeated at the end.
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+
+namespace chokeloops {
+
+// Builds the per-component structures once, for many queries on one mesh. Queries may run concurrently (the
+// CGAL structure of a component is built lazily, under a lock, on its first CGAL query). Throws Error when a
+// loop is empty, uses an index out of range, or two consecutive vertices are not joined by a mesh edge.
+class SurfaceTopology {
+ public:
+  explicit SurfaceTopology(const SurfaceMesh& mesh);
+  // Shares a prebuilt adjacency of `mesh` (kept by reference: it must outlive this object).
+  SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
+  ~SurfaceTopology();
+  SurfaceTopology(const SurfaceTopology&) = delete;
+  SurfaceTopology& operator=(const SurfaceTopology&) = delete;
+
+  // Null-homotopic on the surface (CGAL::Surface_mesh_topology::Curves_on_surface_topology).
+  bool contractible(const std::vector<int>& loop);
+  // The same answer without CGAL's structure when it can: a simple loop on a closed manifold component is
+  // contractible exactly when it bounds a disk, i.e. cutting along it separates the component and one side
+  // has Euler characteristic 1. Two face floods, one from each side of the loop and advanced in turn, decide
+  // it in time proportional to the smaller side (a separating loop) or to the part swept before they meet
+  // (a non-separating one): milliseconds where building CGAL's structure over a large surface takes
+  // seconds. A loop that is not simple is answered by null_homologous() when that shows it essential;
+  // the rest (and any loop on a component with boundary) goes to contractible().
+  bool contractible_fast(const std::vector<int>& loop);
+  // Null in H1(surface; Z/2): the component's faces can be 2-coloured so that exactly the edges the loop
+  // uses an odd number of times separate the colours. Exact for any closed edge path (simple or not) on a
+  // closed component, one face flood; a loop that is not null is non-contractible. On a component with
+  // boundary it answers contractible() instead (a sufficient condition only).
+  bool null_homologous(const std::vector<int>& loop);
+  // How many contractibility queries CGAL answered so far (the others were decided by face floods).
+  int cgal_queries() const;
+  // Removing the loop's edges splits the loop's component into more face-connected parts.
+  bool separates(const std::vector<int>& loop);
+  // Component (face_components numbering) that holds vertex v, -1 for an isolated vertex.
+  int component_of_vertex(int v) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+bool loop_is_contractible(const SurfaceMesh& mesh, const std::vector<int>& loop);
+bool loop_separates_surface(const SurfaceMesh& mesh, const std::vector<int>& loop);
+
+// True when every vertex of the loop occurs once and the loop has at least 3 vertices.
+bool loop_is_simple(const std::vector<int>& loop);
+
+// Turns a closed polyline lying on (or very near) the surface into a closed edge path: the nearest mesh
+// vertex of every point, joined by shortest edge paths (Dijkstra over the part of the mesh near the
+// polyline), with repeated vertices and back-and-forth spurs removed. When `component` >= 0, only vertices
+// of that component are used. The result is a cyclic vertex list (first vertex not repeated).
+// Points with no vertex within a few edge lengths are skipped. Throws Error when nothing is left or the
+// snapped vertices are not connected. The overload with a prebuilt adjacency avoids scanning the faces.
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component = -1);
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
+                                            int component = -1);
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency* adj, const Polyline3& polyline,
+                                            int component);
+
+// Length of a closed polyline (including the closing segment) and of a closed vertex loop.
+double closed_length(const Polyline3& polyline);
+double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop);
+Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop);
+
+}  // namespace chokeloops

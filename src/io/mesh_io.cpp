@@ -1,0 +1,382 @@
+// Mesh input: OBJ, PLY (ascii/binary), OFF, STL (ascii/binary) through CGAL IO, with validation that
+// names the file and the problem in one line (stage `levelset`, DESIGN.md §4).
+#include "chokeloops/io/mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/OBJ.h>
+#include <CGAL/IO/OFF.h>
+#include <CGAL/IO/PLY.h>
+#include <CGAL/IO/STL.h>
+#include <CGAL/IO/polygon_soup_io.h>
+
+#include "chokeloops/grid.h"
+
+namespace chokeloops {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = K::Point_3;
+namespace fs = std::filesystem;
+
+constexpr double kHuge = 1e30;
+
+std::string q(const std::string& path) { return "'" + path + "'"; }
+
+std::string lower_ext(const std::string& path) {
+  std::string e = fs::path(path).extension().string();
+  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+std::uintmax_t file_size_checked(const std::string& path) {
+  std::error_code ec;
+  if (path.empty()) throw Error("empty input file name");
+  if (!fs::exists(path, ec)) throw Error(q(path) + ": no such file");
+  if (fs::is_directory(path, ec)) throw Error(q(path) + ": is a directory, not a mesh file");
+  std::ifstream probe(path, std::ios::binary);
+  if (!probe) throw Error(q(path) + ": cannot open for reading (permission denied?)");
+  auto size = fs::file_size(path, ec);
+  if (ec) throw Error(q(path) + ": cannot determine file size");
+  if (size == 0) throw Error(q(path) + ": empty file");
+  return size;
+}
+
+// ---- PLY header, to check CGAL's counts and binary sizes ourselves ----
+struct PlyHeader {
+  bool ok = false;
+  std::string format;  // ascii, binary_little_endian, binary_big_endian
+  std::size_t header_bytes = 0;
+  std::size_t vertex_count = 0, face_count = 0;
+  bool has_vertex = false, has_face = false;
+  std::size_t min_body_bytes = 0;  // lower bound on the binary body size
+};
+
+std::size_t ply_type_size(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+PlyHeader read_ply_header(const std::string& path) {
+  PlyHeader h;
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line)) return h;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != "ply") throw Error(q(path) + ": not a PLY file (first line is not 'ply')");
+  std::size_t count = 0;
+  std::string current;
+  std::size_t fixed = 0, lists_min = 0;  // per element of `current`
+  auto close_element = [&] {
+    if (current.empty()) return;
+    h.min_body_bytes += count * (fixed + lists_min);
+    if (current == "vertex") { h.vertex_count = count; h.has_vertex = true; }
+    if (current == "face") { h.face_count = count; h.has_face = true; }
+  };
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string kw;
+    ls >> kw;
+    if (kw == "format") ls >> h.format;
+    else if (kw == "element") {
+      close_element();
+      current.clear();
+      long long c = -1;
+      ls >> current >> c;
+      if (c < 0) throw Error(q(path) + ": malformed PLY header line '" + line + "'");
+      count = std::size_t(c);
+      fixed = lists_min = 0;
+    } else if (kw == "property") {
+      std::string t;
+      ls >> t;
+      if (t == "list") {
+        std::string ct, it;
+        ls >> ct >> it;
+        // the list count itself, plus at least 3 indices for a face
+        lists_min += ply_type_size(ct) + (current == "face" ? 3 * ply_type_size(it) : 0);
+      } else {
+        fixed += ply_type_size(t);
+      }
+    } else if (kw == "end_header") {
+      close_element();
+      h.ok = true;
+      h.header_bytes = std::size_t(in.tellg());
+      return h;
+    }
+  }
+  throw Error(q(path) + ": truncated PLY header (no end_header)");
+}
+
+void diagnose_faces(const std::string& path, const std::string& ext);
+
+// ---- diagnostics for ASCII files CGAL refused: find the first non-finite number ----
+void diagnose_ascii(const std::string& path, const std::string& ext) {
+  std::ifstream in(path);
+  std::string line;
+  std::size_t lineno = 0;
+  while (std::getline(in, line) && lineno < 50000000) {
+    ++lineno;
+    std::istringstream ls(line);
+    std::string tok;
+    while (ls >> tok) {
+      std::string t = tok;
+      for (auto& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (!t.empty() && (t[0] == '-' || t[0] == '+')) t = t.substr(1);
+      if (t == "nan" || t == "inf" || t == "infinity" || t.rfind("nan(", 0) == 0)
+        throw Error(q(path) + ": non-finite coordinate '" + tok + "' on line " + std::to_string(lineno));
+    }
+  }
+  diagnose_faces(path, ext);
+}
+
+// OBJ / OFF: faces referencing missing vertices, or no faces at all.
+void diagnose_faces(const std::string& path, const std::string& ext) {
+  std::ifstream in(path);
+  std::string line;
+  auto bad_index = [&](long long idx, long long nv, std::size_t face) {
+    std::ostringstream s;
+    s << q(path) << ": face " << face << " references vertex " << idx << " but the file has only " << nv
+      << " vertices";
+    throw Error(s.str());
+  };
+  if (ext == ".obj") {
+    long long nv = 0;
+    std::size_t nf = 0;
+    std::vector<std::string> faces;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string kw;
+      ls >> kw;
+      if (kw == "v") ++nv;
+      else if (kw == "f") {
+        std::string tok;
+        while (ls >> tok) {
+          long long idx = std::atoll(tok.c_str());  // "i/t/n" → i
+          long long abs_idx = idx < 0 ? nv + idx + 1 : idx;
+          if (idx == 0 || abs_idx < 1 || abs_idx > nv) bad_index(idx, nv, nf);
+        }
+        ++nf;
+      }
+    }
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+  } else if (ext == ".off") {
+    std::vector<std::string> toks;
+    std::string tok;
+    // tokens without comments
+    while (std::getline(in, line)) {
+      auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      std::istringstream ls(line);
+      while (ls >> tok) toks.push_back(tok);
+      if (toks.size() > 50000000) return;
+    }
+    std::size_t t = 0;
+    if (t < toks.size() && toks[t].find("OFF") != std::string::npos) ++t;
+    if (t + 3 > toks.size()) return;
+    auto is_int = [](const std::string& x) {
+      return !x.empty() && std::all_of(x.begin(), x.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+    };
+    if (!is_int(toks[t]) || !is_int(toks[t + 1]) || !is_int(toks[t + 2])) return;
+    long long nv = std::atoll(toks[t].c_str()), nf = std::atoll(toks[t + 1].c_str());
+    t += 3;
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+    t += std::size_t(std::max(0LL, nv)) * 3;
+    for (long long f = 0; f < nf && t < toks.size(); ++f) {
+      long long k = std::atoll(toks[t++].c_str());
+      for (long long j = 0; j < k && t < toks.size(); ++j) {
+        long long idx = std::atoll(toks[t++].c_str());
+        if (idx < 0 || idx >= nv) bad_index(idx, nv, std::size_t(f));
+      }
+      // skip optional colour values up to the next face: not handled (rare); stop at mismatch
+    }
+    if (t < toks.size() && std::size_t(nv) * 3 + 3 < toks.size()) return;
+    if (toks.size() < t) throw Error(q(path) + ": truncated OFF file");
+  }
+}
+
+// Binary STL: 80-byte header, uint32 count, 50 bytes per triangle.
+bool stl_is_binary(const std::string& path, std::uintmax_t size, std::uint32_t* count) {
+  std::ifstream in(path, std::ios::binary);
+  char head[84] = {0};
+  in.read(head, 84);
+  const std::streamsize got = in.gcount();
+  bool starts_solid = got >= 5 && std::strncmp(head, "solid", 5) == 0;
+  std::uint32_t n = 0;
+  if (got == 84) std::memcpy(&n, head + 80, 4);  // little-endian host assumed (x86/arm)
+  *count = n;
+  if (got == 84 && 84 + 50 * std::uintmax_t(n) == size) return true;  // exact binary size
+  if (starts_solid) {
+    // ASCII STL must contain 'facet' or 'endsolid' as text; binary files named 'solid...' exist too
+    std::ifstream t(path);
+    std::string w;
+    int words = 0;
+    while (t >> w && words < 64) {
+      ++words;
+      if (w == "facet" || w == "endsolid") return false;
+    }
+    return got == 84;
+  }
+  return true;
+}
+
+void check_point(const std::string& path, const Point& p, std::size_t i) {
+  for (int a = 0; a < 3; ++a) {
+    const double x = p[a];
+    if (!std::isfinite(x)) {
+      std::ostringstream s;
+      s << q(path) << ": vertex " << i << " has a non-finite coordinate (" << x << ")";
+      throw Error(s.str());
+    }
+    if (std::abs(x) > kHuge) {
+      std::ostringstream s;
+      s << q(path) << ": vertex " << i << " has a huge coordinate (" << x << ", limit 1e30)";
+      throw Error(s.str());
+    }
+  }
+}
+
+}  // namespace
+
+const std::vector<std::string>& mesh_extensions() {
+  static const std::vector<std::string> e{".obj", ".ply", ".off", ".stl"};
+  return e;
+}
+
+TriangleMesh read_mesh(const std::string& path) {
+  const std::uintmax_t size = file_size_checked(path);
+  const std::string ext = lower_ext(path);
+  auto& exts = mesh_extensions();
+  if (std::find(exts.begin(), exts.end(), ext) == exts.end())
+    throw Error(q(path) + ": unknown mesh extension '" + ext + "' (supported: .obj .ply .off .stl, and .vdb)");
+
+  std::vector<Point> points;
+  std::vector<std::vector<std::size_t>> polygons;
+  bool ok = false;
+  bool binary = false;
+  PlyHeader ply;
+  std::uint32_t stl_count = 0;
+  std::string format = ext.substr(1);
+  for (auto& c : format) c = char(std::toupper(static_cast<unsigned char>(c)));
+
+  if (ext == ".ply") {
+    ply = read_ply_header(path);
+    if (!ply.has_vertex) throw Error(q(path) + ": PLY header declares no vertex element");
+    if (!ply.has_face) throw Error(q(path) + ": PLY header declares no face element (a point cloud, not a mesh)");
+    binary = ply.format.rfind("binary", 0) == 0;
+    if (binary && size < ply.header_bytes + ply.min_body_bytes) {
+      std::ostringstream s;
+      s << q(path) << ": truncated binary PLY (" << size << " bytes, the header's " << ply.vertex_count
+        << " vertices and " << ply.face_count << " faces need at least " << ply.header_bytes + ply.min_body_bytes
+        << ")";
+      throw Error(s.str());
+    }
+  } else if (ext == ".stl") {
+    binary = stl_is_binary(path, size, &stl_count);
+    if (binary) {
+      if (size < 84) throw Error(q(path) + ": truncated binary STL (shorter than its 84-byte header)");
+      if (84 + 50 * std::uintmax_t(stl_count) > size) {
+        std::ostringstream s;
+        s << q(path) << ": truncated binary STL (" << size << " bytes, header announces " << stl_count
+          << " triangles = " << 84 + 50 * std::uintmax_t(stl_count) << " bytes)";
+        throw Error(s.str());
+      }
+    }
+  }
+
+  try {
+    if (ext == ".obj") ok = CGAL::IO::read_OBJ(path, points, polygons);
+    else if (ext == ".off") ok = CGAL::IO::read_OFF(path, points, polygons);
+    else if (ext == ".ply") ok = CGAL::IO::read_PLY(path, points, polygons);
+    else if (ext == ".stl") ok = CGAL::IO::read_STL(path, points, polygons, CGAL::parameters::use_binary_mode(binary));
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string m = e.what();
+    std::replace(m.begin(), m.end(), '\n', ' ');
+    throw Error(q(path) + ": cannot parse as " + format + " (" + m + ")");
+  }
+  if (!ok) {
+    if (!binary) diagnose_ascii(path, ext);
+    throw Error(q(path) + ": cannot parse as " + (binary ? "binary " : "") + format + " (malformed or truncated file)");
+  }
+  if (ext == ".ply" && (points.size() != ply.vertex_count || polygons.size() != ply.face_count)) {
+    std::ostringstream s;
+    s << q(path) << ": truncated or malformed PLY (read " << points.size() << " of " << ply.vertex_count
+      << " vertices and " << polygons.size() << " of " << ply.face_count << " faces)";
+    throw Error(s.str());
+  }
+  if (ext == ".stl" && binary && polygons.size() != stl_count) {
+    std::ostringstream s;
+    s << q(path) << ": truncated or malformed binary STL (read " << polygons.size() << " of " << stl_count
+      << " triangles)";
+    throw Error(s.str());
+  }
+  if (points.empty()) throw Error(q(path) + ": no vertices");
+  if (points.size() >= std::size_t(std::numeric_limits<int>::max()))
+    throw Error(q(path) + ": too many vertices (" + std::to_string(points.size()) + ")");
+
+  TriangleMesh mesh;
+  mesh.vertices.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    check_point(path, points[i], i);
+    mesh.vertices[i] = {points[i].x(), points[i].y(), points[i].z()};
+  }
+  mesh.faces.reserve(polygons.size());
+  for (std::size_t f = 0; f < polygons.size(); ++f) {
+    const auto& poly = polygons[f];
+    if (poly.size() < 3) {
+      std::ostringstream s;
+      s << q(path) << ": face " << f << " has " << poly.size() << " vertices (at least 3 needed)";
+      throw Error(s.str());
+    }
+    for (std::size_t v : poly)
+      if (v >= points.size()) {
+        std::ostringstream s;
+        s << q(path) << ": face " << f << " references vertex " << v << " but the file has only " << points.size()
+          << " vertices (indices 0.." << points.size() - 1 << ")";
+        throw Error(s.str());
+      }
+    auto P = [&](std::size_t v) { return points[poly[v]]; };
+    if (poly.size() == 4) {
+      // split along the shorter diagonal
+      if (CGAL::squared_distance(P(0), P(2)) <= CGAL::squared_distance(P(1), P(3))) {
+        mesh.faces.push_back({int(poly[0]), int(poly[1]), int(poly[2])});
+        mesh.faces.push_back({int(poly[0]), int(poly[2]), int(poly[3])});
+      } else {
+        mesh.faces.push_back({int(poly[0]), int(poly[1]), int(poly[3])});
+        mesh.faces.push_back({int(poly[1]), int(poly[2]), int(poly[3])});
+      }
+    } else {
+      for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+        mesh.faces.push_back({int(poly[0]), int(poly[k]), int(poly[k + 1])});
+    }
+  }
+  if (mesh.faces.empty()) throw Error(q(path) + ": no faces (" + std::to_string(points.size()) + " vertices, 0 faces)");
+  return mesh;
+}
+
+void write_mesh(const TriangleMesh& mesh, const std::string& path) {
+  std::vector<Point> points;
+  points.reserve(mesh.vertices.size());
+  for (auto& v : mesh.vertices) points.emplace_back(v[0], v[1], v[2]);
+  std::vector<std::vector<std::size_t>> polys;
+  polys.reserve(mesh.faces.size());
+  for (auto& f : mesh.faces) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  if (!CGAL::IO::write_polygon_soup(path, points, polys, CGAL::parameters::stream_precision(17)))
+    throw Error("cannot write mesh '" + path + "'");
+}
+
+}  // namespace chokeloops

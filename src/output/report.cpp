@@ -1,0 +1,101 @@
+// Stage `report`: the files other programs rely on (DESIGN §5). Field names are a contract: add, never rename.
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "chokeloops/analyze.h"
+#include "chokeloops/output/mesh_write.h"
+
+namespace chokeloops {
+
+namespace {
+nlohmann::json point(const std::array<double, 3>& p) { return nlohmann::json::array({p[0], p[1], p[2]}); }
+}  // namespace
+
+void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const std::string& outdir) {
+  std::error_code ec;
+  std::filesystem::create_directories(outdir, ec);
+  if (ec || !std::filesystem::is_directory(outdir))
+    throw Error("cannot create output directory '" + outdir + "': " + ec.message());
+  write_ply(r.surface, outdir + "/surface.ply");
+  std::vector<Polyline3> polylines;
+  for (const Loop& l : r.loops)
+    if (l.found) polylines.push_back(l.points);
+  write_loops_ply(polylines, outdir + "/loops.ply");
+  write_loops_obj(polylines, outdir + "/loops.obj");
+
+  using nlohmann::json;
+  json j;
+  j["input"] = std::filesystem::path(r.input).filename().string();
+  j["units"] = "input";
+  j["voxel_size"] = r.grid.voxel_size;
+  j["grid"] = {{"dims", {r.grid.dims[0], r.grid.dims[1], r.grid.dims[2]}},
+               {"origin", {r.grid.origin[0], r.grid.origin[1], r.grid.origin[2]}}};
+  if (r.resolution > 0) j["grid"]["resolution"] = r.resolution;
+  const SurfaceStats& st = r.surface_stats;
+  j["surface"] = {{"vertices", st.vertices}, {"faces", st.faces}, {"components", st.components},
+                  {"genus", st.genus}, {"closed", st.closed_manifold}, {"euler", st.euler}};
+  if (r.input_genus >= 0) j["surface"]["input_genus"] = r.input_genus;
+  j["scales"] = {{"R_in", r.chokes.R_in}, {"R_out", r.chokes.R_out}};
+  j["parameters"] = {{"d_max", options.chokes.d_max.text()},
+                     {"min_persistence", options.chokes.min_persistence.text()},
+                     {"d_max_abs", r.chokes.d_max_handle},
+                     {"d_max_abs_handle", r.chokes.d_max_handle},
+                     {"d_max_abs_tunnel", r.chokes.d_max_tunnel},
+                     {"min_persistence_abs_handle", r.chokes.min_persistence_handle},
+                     {"min_persistence_abs_tunnel", r.chokes.min_persistence_tunnel},
+                     {"side", options.chokes.handles && options.chokes.tunnels ? "both" : options.chokes.handles ? "handle" : "tunnel"}};
+  j["counts"] = {{"handle_generators", r.chokes.handle_generators},
+                 {"tunnel_generators", r.chokes.tunnel_generators},
+                 {"components", r.chokes.components},
+                 {"gaps", r.chokes.gaps},
+                 {"sealed_cavities", r.chokes.sealed_cavities},
+                 {"pairs", {r.diagram.count(0), r.diagram.count(1), r.diagram.count(2)}}};
+  FreudenthalComplex cx(r.grid.dims);
+  json loops = json::array();
+  for (std::size_t i = 0; i < r.loops.size(); ++i) {
+    const Loop& l = r.loops[i];
+    const Choke& c = l.choke;
+    json pts = json::array();
+    for (auto& p : l.points) pts.push_back(point(p));
+    auto sc = cx.coords(c.saddle);
+    loops.push_back({{"id", i},
+                     {"side", to_string(c.side)},
+                     {"kind", to_string(c.kind)},
+                     {"depth", c.depth},
+                     {"persistence", c.persistence},
+                     {"birth", c.birth},
+                     {"death", c.death},
+                     {"length", l.length},
+                     {"choke_point", point(c.point)},
+                     {"centroid", point(l.centroid)},
+                     {"normal", point(l.normal)},
+                     {"radius_min", l.radius_min},
+                     {"radius_mean", l.radius_mean},
+                     {"raw_length", l.raw_length},
+                     {"found", l.found},
+                     {"note", l.note},
+                     {"choke_simplex", {{"dim", c.simplex_dim}, {"id", c.simplex}, {"grid_vertex", {sc[0], sc[1], sc[2]}}}},
+                     {"points", pts}});
+  }
+  j["loops"] = loops;
+  json hd = json::array(), td = json::array();
+  for (auto& p : r.chokes.handle_diagram) hd.push_back({p[0], p[1]});
+  for (auto& p : r.chokes.tunnel_diagram) td.push_back({p[0], p[1]});
+  j["diagram"] = {{"handle", hd}, {"tunnel", td}};
+  auto filtered = [](const std::array<double, 2>& c, double scale) {
+    if (c[1] <= 0) return json(nullptr);
+    return json{{"depth", c[0]}, {"persistence", c[1]}, {"persistence_percent", scale > 0 ? 100 * c[1] / scale : 0}};
+  };
+  j["strongest_filtered"] = {{"handle", filtered(r.chokes.strongest_filtered_handle, r.chokes.R_in)},
+                             {"tunnel", filtered(r.chokes.strongest_filtered_tunnel, r.chokes.R_out)}};
+  j["warnings"] = r.warnings;
+  json timings = json::object();
+  for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;
+  j["timings_ms"] = timings;
+  std::ofstream out(outdir + "/loops.json");
+  out << j.dump(1) << "\n";
+  if (!out) throw Error("cannot write '" + outdir + "/loops.json' (disk full?)");
+}
+
+}  // namespace chokeloops

@@ -1,0 +1,80 @@
+#include "chokeloops/surface/mesh_adjacency.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cstdint>
+
+namespace chokeloops {
+
+int MeshAdjacency::halfedge(const SurfaceMesh& m, int a, int b) const {
+  for (int i = vf_start[a]; i < vf_start[a + 1]; ++i) {
+    int f = vf[i];
+    for (int k = 0; k < 3; ++k)
+      if (m.faces[f][k] == a && m.faces[f][(k + 1) % 3] == b) return 3 * f + k;
+  }
+  return -1;
+}
+
+bool MeshAdjacency::has_edge(int a, int b) const {
+  return std::binary_search(vv.begin() + vv_start[a], vv.begin() + vv_start[a + 1], b);
+}
+
+MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
+  MeshAdjacency A;
+  const size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
+  struct HE { std::uint64_t key; int h; };
+  std::vector<HE> he(3 * nf);
+  tbb::parallel_for(size_t(0), nf, [&](size_t f) {
+    for (int k = 0; k < 3; ++k) {
+      int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      he[3 * f + k] = {(std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)),
+                       int(3 * f + k)};
+    }
+  });
+  tbb::parallel_sort(he.begin(), he.end(), [](const HE& x, const HE& y) { return x.key < y.key || (x.key == y.key && x.h < y.h); });
+  A.twin.assign(3 * nf, -1);
+  A.vv_start.assign(nv + 1, 0);
+  size_t nedges = 0;
+  for (size_t i = 0; i < he.size();) {
+    size_t j = i;
+    while (j < he.size() && he[j].key == he[i].key) ++j;
+    if (j - i == 2) {
+      A.twin[he[i].h] = he[i + 1].h;
+      A.twin[he[i + 1].h] = he[i].h;
+    }
+    ++A.vv_start[(he[i].key >> 32) + 1];
+    ++A.vv_start[(he[i].key & 0xffffffffu) + 1];
+    ++nedges;
+    i = j;
+  }
+  for (size_t v = 0; v < nv; ++v) A.vv_start[v + 1] += A.vv_start[v];
+  A.vv.resize(2 * nedges);
+  {
+    std::vector<int> fill(A.vv_start.begin(), A.vv_start.end() - 1);
+    for (size_t i = 0; i < he.size();) {
+      size_t j = i;
+      while (j < he.size() && he[j].key == he[i].key) ++j;
+      int a = int(he[i].key >> 32), b = int(he[i].key & 0xffffffffu);
+      A.vv[fill[a]++] = b;
+      A.vv[fill[b]++] = a;
+      i = j;
+    }
+  }
+  // Neighbours come out sorted for a (keys sorted by min then max) only partly; sort each list.
+  tbb::parallel_for(size_t(0), nv, [&](size_t v) { std::sort(A.vv.begin() + A.vv_start[v], A.vv.begin() + A.vv_start[v + 1]); });
+  A.vf_start.assign(nv + 1, 0);
+  for (auto& t : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++A.vf_start[t[k] + 1];
+  for (size_t v = 0; v < nv; ++v) A.vf_start[v + 1] += A.vf_start[v];
+  A.vf.resize(3 * nf);
+  {
+    std::vector<int> fill(A.vf_start.begin(), A.vf_start.end() - 1);
+    for (size_t f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) A.vf[fill[mesh.faces[f][k]]++] = int(f);
+  }
+  return A;
+}
+
+}  // namespace chokeloops

@@ -1,0 +1,456 @@
+#include "chokeloops/surface/topology.h"
+
+#include <CGAL/Curves_on_surface_topology.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Path_on_surface.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+
+namespace chokeloops {
+
+namespace {
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using SM = CGAL::Surface_mesh<K::Point_3>;
+using CST = CGAL::Surface_mesh_topology::Curves_on_surface_topology<SM>;
+using Path = CGAL::Surface_mesh_topology::Path_on_surface<SM>;
+
+double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+}  // namespace
+
+struct SurfaceTopology::Impl {
+  const SurfaceMesh& mesh;
+  MeshAdjacency own;
+  const MeshAdjacency& adj;
+  std::vector<int> face_label;
+  std::vector<int> vertex_label;
+  int components = 0;
+  std::vector<std::int64_t> euler;  // per component: V - E + F
+  std::vector<char> closed;         // per component: every edge has two faces
+  std::mutex cgal_lock;
+  int cgal_queries = 0;  // guarded by cgal_lock
+  struct Component {
+    std::unique_ptr<SM> sm;
+    std::unique_ptr<CST> cst;
+    std::unordered_map<int, SM::Vertex_index> local;
+  };
+  std::map<int, Component> comps;
+
+  Impl(const SurfaceMesh& m, const MeshAdjacency* a) : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
+    components = face_components(m, face_label);
+    vertex_label.assign(m.vertices.size(), -1);
+    for (size_t f = 0; f < m.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) vertex_label[m.faces[f][k]] = face_label[f];
+    euler.assign(size_t(std::max(components, 0)), 0);
+    closed.assign(size_t(std::max(components, 0)), 1);
+    for (size_t v = 0; v < m.vertices.size(); ++v)
+      if (vertex_label[v] >= 0) ++euler[vertex_label[v]];
+    std::vector<std::int64_t> edges(euler.size(), 0), faces(euler.size(), 0);
+    for (size_t f = 0; f < m.faces.size(); ++f) {
+      ++faces[face_label[f]];
+      for (int k = 0; k < 3; ++k) {
+        int h = int(3 * f + k), t = adj.twin[h];
+        if (t < 0) closed[face_label[f]] = 0;
+        if (t < 0 || h < t) ++edges[face_label[f]];
+      }
+    }
+    for (size_t c = 0; c < euler.size(); ++c) euler[c] += faces[c] - edges[c];
+  }
+
+  void check(const std::vector<int>& loop) const {
+    if (loop.empty()) throw Error("loop is empty");
+    for (int v : loop)
+      if (v < 0 || size_t(v) >= mesh.vertices.size()) throw Error("loop vertex index out of range");
+    for (size_t i = 0; i < loop.size(); ++i) {
+      int a = loop[i], b = loop[(i + 1) % loop.size()];
+      if (!adj.has_edge(a, b)) throw Error("loop vertices " + std::to_string(a) + " and " + std::to_string(b) +
+                                           " are not joined by a mesh edge");
+    }
+  }
+
+  Component& component(int c) {
+    auto it = comps.find(c);
+    if (it != comps.end()) return it->second;
+    Component& C = comps[c];
+    C.sm = std::make_unique<SM>();
+    for (size_t f = 0; f < mesh.faces.size(); ++f) {
+      if (face_label[f] != c) continue;
+      std::array<SM::Vertex_index, 3> vs;
+      for (int k = 0; k < 3; ++k) {
+        int v = mesh.faces[f][k];
+        auto j = C.local.find(v);
+        if (j == C.local.end()) {
+          auto& p = mesh.vertices[v];
+          j = C.local.emplace(v, C.sm->add_vertex(K::Point_3(p[0], p[1], p[2]))).first;
+        }
+        vs[k] = j->second;
+      }
+      if (C.sm->add_face(vs[0], vs[1], vs[2]) == SM::null_face())
+        throw Error("surface component is not an oriented 2-manifold; cannot test contractibility");
+    }
+    C.cst = std::make_unique<CST>(*C.sm);
+    return C;
+  }
+};
+
+SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh) : impl_(std::make_unique<Impl>(mesh, nullptr)) {}
+SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency)
+    : impl_(std::make_unique<Impl>(mesh, &adjacency)) {}
+SurfaceTopology::~SurfaceTopology() = default;
+
+int SurfaceTopology::cgal_queries() const {
+  std::lock_guard<std::mutex> hold(impl_->cgal_lock);
+  return impl_->cgal_queries;
+}
+
+int SurfaceTopology::component_of_vertex(int v) const { return impl_->vertex_label.at(size_t(v)); }
+
+bool SurfaceTopology::contractible(const std::vector<int>& loop) {
+  impl_->check(loop);
+  if (loop.size() < 3) return true;  // a point or an edge traversed back and forth
+  std::lock_guard<std::mutex> hold(impl_->cgal_lock);
+  ++impl_->cgal_queries;
+  auto& C = impl_->component(impl_->vertex_label[loop[0]]);
+  Path p(*C.sm);
+  for (size_t i = 0; i < loop.size(); ++i) {
+    auto a = C.local.at(loop[i]), b = C.local.at(loop[(i + 1) % loop.size()]);
+    auto h = CGAL::halfedge(a, b, *C.sm);
+    if (!h.second) throw Error("loop edge missing from the component mesh");
+    p.push_back(h.first, false, false);
+  }
+  p.update_is_closed();
+  if (!p.is_closed()) throw Error("loop is not closed");
+  return C.cst->is_contractible(p);
+}
+
+bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
+  impl_->check(loop);
+  if (loop.size() < 3) return true;
+  const auto& mesh = impl_->mesh;
+  const auto& adj = impl_->adj;
+  const int c = impl_->vertex_label[loop[0]];
+  if (c < 0 || !impl_->closed[c]) return contractible(loop);
+  if (!loop_is_simple(loop)) return null_homologous(loop) && contractible(loop);
+  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_set<std::uint64_t> cut;
+  std::vector<char> on_loop(mesh.vertices.size(), 0);  // spares most edges the hash look-up
+  for (size_t i = 0; i < loop.size(); ++i) {
+    cut.insert(key(loop[i], loop[(i + 1) % loop.size()]));
+    on_loop[loop[i]] = 1;
+  }
+  int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  if (h0 < 0) h0 = adj.halfedge(mesh, loop[1], loop[0]);  // the loop runs against the faces' orientation
+  const int t0 = h0 < 0 ? -1 : adj.twin[h0];
+  if (t0 < 0) return contractible(loop);
+  // side[f]: 0 unseen, 1 or 2 the side of the loop whose flood reached f first.
+  std::vector<char> side(mesh.faces.size(), 0);
+  std::array<std::vector<int>, 2> queue{std::vector<int>{MeshAdjacency::face(h0)}, std::vector<int>{MeshAdjacency::face(t0)}};
+  std::array<std::size_t, 2> head{0, 0};
+  side[queue[0][0]] = 1;
+  side[queue[1][0]] = 2;
+  int done = -1;
+  while (done < 0) {
+    for (int s = 0; s < 2 && done < 0; ++s) {
+      if (head[s] == queue[s].size()) { done = s; break; }
+      int f = queue[s][head[s]++];
+      for (int k = 0; k < 3; ++k) {
+        int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+        if (on_loop[a] && on_loop[b] && cut.count(key(a, b))) continue;
+        int g = MeshAdjacency::face(adj.twin[3 * f + k]);
+        if (side[g] == 0) { side[g] = char(s + 1); queue[s].push_back(g); }
+        else if (side[g] != s + 1) return false;  // both sides are one: the loop does not separate
+      }
+    }
+  }
+  // The loop separates; side `done` is complete. Its Euler characteristic (the loop's edges and vertices
+  // included once) decides whether it is a disk; the other side's is the component's minus it (the loop,
+  // a circle, has characteristic 0).
+  const auto& faces = queue[done];
+  std::vector<char> seen(mesh.vertices.size(), 0);
+  std::int64_t V = 0;
+  for (int f : faces)
+    for (int k = 0; k < 3; ++k)
+      if (!seen[mesh.faces[f][k]]) seen[mesh.faces[f][k]] = 1, ++V;
+  const std::int64_t F = std::int64_t(faces.size()), L = std::int64_t(loop.size());
+  const std::int64_t E = (3 * F + L) / 2;  // interior edges are shared by two of its faces, loop edges not
+  const std::int64_t chi = V - E + F;
+  return chi == 1 || impl_->euler[c] - chi == 1;
+}
+
+bool SurfaceTopology::null_homologous(const std::vector<int>& loop) {
+  impl_->check(loop);
+  const auto& mesh = impl_->mesh;
+  const auto& adj = impl_->adj;
+  const int c = impl_->vertex_label[loop[0]];
+  if (c < 0 || !impl_->closed[c]) return contractible(loop);
+  if (loop.size() < 3) return true;
+  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_map<std::uint64_t, char> parity;
+  std::vector<char> on_loop(mesh.vertices.size(), 0);
+  for (size_t i = 0; i < loop.size(); ++i) {
+    parity[key(loop[i], loop[(i + 1) % loop.size()])] ^= 1;
+    on_loop[loop[i]] = 1;
+  }
+  int h0 = adj.halfedge(mesh, loop[0], loop[1]);
+  if (h0 < 0) h0 = adj.halfedge(mesh, loop[1], loop[0]);  // the loop runs against the faces' orientation
+  if (h0 < 0) return contractible(loop);
+  std::vector<signed char> colour(mesh.faces.size(), -1);
+  std::vector<int> queue{MeshAdjacency::face(h0)};
+  colour[queue[0]] = 0;
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    int f = queue[q];
+    for (int k = 0; k < 3; ++k) {
+      int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
+      char flip = 0;
+      if (on_loop[a] && on_loop[b]) {
+        auto it = parity.find(key(a, b));
+        if (it != parity.end()) flip = it->second;
+      }
+      int g = MeshAdjacency::face(adj.twin[3 * f + k]);
+      signed char want = static_cast<signed char>(colour[f] ^ flip);
+      if (colour[g] < 0) { colour[g] = want; queue.push_back(g); }
+      else if (colour[g] != want) return false;
+    }
+  }
+  return true;
+}
+
+bool SurfaceTopology::separates(const std::vector<int>& loop) {
+  impl_->check(loop);
+  const auto& mesh = impl_->mesh;
+  const auto& adj = impl_->adj;
+  int c = impl_->vertex_label[loop[0]];
+  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+  std::unordered_set<std::uint64_t> cut;
+  for (size_t i = 0; i < loop.size(); ++i) cut.insert(key(loop[i], loop[(i + 1) % loop.size()]));
+  // Flood the component's faces from one face, never crossing a cut edge.
+  int start = -1;
+  size_t total = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f)
+    if (impl_->face_label[f] == c) {
+      if (start < 0) start = int(f);
+      ++total;
+    }
+  std::vector<char> seen(mesh.faces.size(), 0);
+  std::vector<int> stack{start};
+  seen[start] = 1;
+  size_t reached = 1;
+  while (!stack.empty()) {
+    int f = stack.back();
+    stack.pop_back();
+    for (int k = 0; k < 3; ++k) {
+      int h = 3 * f + k, t = adj.twin[h];
+      if (t < 0) continue;
+      if (cut.count(key(mesh.faces[f][k], mesh.faces[f][(k + 1) % 3]))) continue;
+      int g = MeshAdjacency::face(t);
+      if (!seen[g]) {
+        seen[g] = 1;
+        ++reached;
+        stack.push_back(g);
+      }
+    }
+  }
+  return reached < total;
+}
+
+bool loop_is_contractible(const SurfaceMesh& mesh, const std::vector<int>& loop) {
+  SurfaceTopology t(mesh);
+  return t.contractible(loop);
+}
+bool loop_separates_surface(const SurfaceMesh& mesh, const std::vector<int>& loop) {
+  SurfaceTopology t(mesh);
+  return t.separates(loop);
+}
+
+bool loop_is_simple(const std::vector<int>& loop) {
+  if (loop.size() < 3) return false;
+  std::vector<int> s(loop);
+  std::sort(s.begin(), s.end());
+  return std::adjacent_find(s.begin(), s.end()) == s.end();
+}
+
+double closed_length(const Polyline3& p) {
+  double L = 0;
+  for (size_t i = 0; i < p.size(); ++i) L += dist(p[i], p[(i + 1) % p.size()]);
+  return L;
+}
+Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop) {
+  Polyline3 p;
+  for (int v : loop) p.push_back(mesh.vertices.at(size_t(v)));
+  return p;
+}
+double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop) { return closed_length(loop_points(mesh, loop)); }
+
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component) {
+  return snap_polyline_to_edge_path(mesh, nullptr, polyline, component);
+}
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
+                                            int component) {
+  return snap_polyline_to_edge_path(mesh, &adj, polyline, component);
+}
+
+std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshAdjacency* adj, const Polyline3& polyline,
+                                            int component) {
+  if (polyline.empty()) throw Error("polyline is empty");
+  if (mesh.faces.empty()) throw Error("surface is empty");
+  std::vector<int> vlabel;
+  if (component >= 0) {
+    std::vector<int> fl;
+    face_components(mesh, fl);
+    vlabel.assign(mesh.vertices.size(), -1);
+    for (size_t f = 0; f < mesh.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) vlabel[mesh.faces[f][k]] = fl[f];
+  }
+  // Local region: the polyline's bounding box grown by a margin.
+  double edge = 0;
+  size_t stride = std::max<size_t>(1, mesh.faces.size() / 4096), sampled = 0;
+  for (size_t f = 0; f < mesh.faces.size(); f += stride, ++sampled)
+    edge += dist(mesh.vertices[mesh.faces[f][0]], mesh.vertices[mesh.faces[f][1]]);
+  edge /= double(sampled);
+  double seg = 0;
+  for (size_t i = 0; i < polyline.size(); ++i) seg = std::max(seg, dist(polyline[i], polyline[(i + 1) % polyline.size()]));
+  double margin = 4 * std::max(edge, seg) + 4 * edge;
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (auto& p : polyline)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d] - margin), hi[d] = std::max(hi[d], p[d] + margin);
+  auto in_box = [&](const std::array<double, 3>& p) {
+    for (int d = 0; d < 3; ++d)
+      if (p[d] < lo[d] || p[d] > hi[d]) return false;
+    return true;
+  };
+  std::vector<int> local(mesh.vertices.size(), -1), global;
+  for (size_t v = 0; v < mesh.vertices.size(); ++v)
+    if (in_box(mesh.vertices[v]) && (component < 0 || vlabel[v] == component)) {
+      local[v] = int(global.size());
+      global.push_back(int(v));
+    }
+  if (global.empty()) throw Error("no surface vertex near the polyline");
+  // Local adjacency.
+  std::vector<std::vector<int>> nb(global.size());
+  if (adj) {
+    for (size_t i = 0; i < global.size(); ++i)
+      for (int j = adj->vv_start[global[i]]; j < adj->vv_start[global[i] + 1]; ++j)
+        if (local[adj->vv[j]] >= 0) nb[i].push_back(local[adj->vv[j]]);
+  } else {
+    for (auto& t : mesh.faces)
+      for (int k = 0; k < 3; ++k) {
+        int a = local[t[k]], b = local[t[(k + 1) % 3]];
+        if (a >= 0 && b >= 0) nb[a].push_back(b), nb[b].push_back(a);
+      }
+  }
+  for (auto& n : nb) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+  // Nearest vertex per point (spatial hash over the local vertices).
+  double cell = 2 * edge;
+  auto cell_of = [&](const std::array<double, 3>& p) {
+    return std::array<long, 3>{long(std::floor((p[0] - lo[0]) / cell)), long(std::floor((p[1] - lo[1]) / cell)),
+                               long(std::floor((p[2] - lo[2]) / cell))};
+  };
+  auto hkey = [](long x, long y, long z) { return (std::uint64_t(x) * 73856093u) ^ (std::uint64_t(y) * 19349663u) ^ (std::uint64_t(z) * 83492791u); };
+  std::unordered_multimap<std::uint64_t, int> hash;
+  hash.reserve(global.size() * 2);
+  for (size_t i = 0; i < global.size(); ++i) {
+    auto c = cell_of(mesh.vertices[global[i]]);
+    hash.emplace(hkey(c[0], c[1], c[2]), int(i));
+  }
+  auto nearest = [&](const std::array<double, 3>& p) {
+    auto c = cell_of(p);
+    int best = -1;
+    double bd = 1e300;
+    const int rmax = int(margin / cell) + 2;
+    for (int r = 0; r <= rmax; ++r) {
+      for (long x = c[0] - r; x <= c[0] + r; ++x)
+        for (long y = c[1] - r; y <= c[1] + r; ++y)
+          for (long z = c[2] - r; z <= c[2] + r; ++z) {
+            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r) continue;
+            auto range = hash.equal_range(hkey(x, y, z));
+            for (auto it = range.first; it != range.second; ++it) {
+              double d = dist(p, mesh.vertices[global[it->second]]);
+              if (d < bd) bd = d, best = it->second;
+            }
+          }
+      if (best >= 0 && bd < r * cell) break;  // every unvisited cell is farther than r*cell
+    }
+    return best;
+  };
+  std::vector<int> snapped;
+  for (auto& p : polyline) {
+    int v = nearest(p);
+    if (v >= 0 && (snapped.empty() || snapped.back() != v)) snapped.push_back(v);
+  }
+  while (snapped.size() > 1 && snapped.back() == snapped.front()) snapped.pop_back();
+  if (snapped.empty()) throw Error("no surface vertex near the polyline");
+  if (snapped.size() < 2) return {global[snapped[0]]};
+  // Join consecutive vertices by shortest edge paths.
+  std::vector<double> d(global.size(), std::numeric_limits<double>::infinity());
+  std::vector<int> from(global.size(), -1), touched;
+  std::vector<int> path;
+  for (size_t i = 0; i < snapped.size(); ++i) {
+    int s = snapped[i], t = snapped[(i + 1) % snapped.size()];
+    for (int v : touched) d[v] = std::numeric_limits<double>::infinity(), from[v] = -1;
+    touched.clear();
+    using QE = std::pair<double, int>;
+    std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
+    d[s] = 0;
+    touched.push_back(s);
+    q.push({0, s});
+    while (!q.empty()) {
+      auto [dv, v] = q.top();
+      q.pop();
+      if (dv > d[v]) continue;
+      if (v == t) break;
+      for (int w : nb[v]) {
+        double nd = dv + dist(mesh.vertices[global[v]], mesh.vertices[global[w]]);
+        if (nd < d[w]) {
+          if (std::isinf(d[w])) touched.push_back(w);
+          d[w] = nd, from[w] = v;
+          q.push({nd, w});
+        }
+      }
+    }
+    if (std::isinf(d[t])) throw Error("polyline points are not connected on the surface");
+    std::vector<int> seg_path;
+    for (int v = t; v != s; v = from[v]) seg_path.push_back(v);
+    std::reverse(seg_path.begin(), seg_path.end());  // excludes s, ends with t
+    path.push_back(global[s]);
+    for (size_t k = 0; k + 1 < seg_path.size(); ++k) path.push_back(global[seg_path[k]]);
+  }
+  // Remove spurs a b a -> a and repeats, cyclically, until stable.
+  bool changed = true;
+  while (changed && path.size() >= 3) {
+    changed = false;
+    std::vector<int> out;
+    for (int v : path) {
+      if (!out.empty() && out.back() == v) { changed = true; continue; }
+      if (out.size() >= 2 && out[out.size() - 2] == v) { out.pop_back(); changed = true; continue; }
+      out.push_back(v);
+    }
+    while (out.size() >= 2 && out.front() == out.back()) out.pop_back(), changed = true;
+    while (out.size() >= 3 && out[out.size() - 2] == out.front()) out.pop_back(), changed = true;
+    while (out.size() >= 3 && out[1] == out.back()) {  // spur through the start: b a b ... -> rotate away
+      out.erase(out.begin());
+      out.pop_back();
+      changed = true;
+    }
+    path.swap(out);
+  }
+  // Cut out repeated vertices (figure-eights): keep the longest simple piece is not homotopy-safe, so
+  // leave them; callers check loop_is_simple.
+  return path;
+}
+
+}  // namespace chokeloops

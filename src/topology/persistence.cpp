@@ -1,0 +1,309 @@
+// Lower-star persistence on the implicit Freudenthal complex, without a global boundary matrix.
+//
+// Why it is fast: a vertex whose lower link (the part of its 14-neighbour link sphere below it) is a
+// disk changes no homology, so every pair between two different lower stars starts and ends at a
+// vertex whose lower link has several components (join saddle: dim-0 deaths, dim-1 births), whose
+// upper link has several components (split saddle: dim-2 births, dim-1 deaths), or at an extremum.
+// A 14-bit mask and a table of link components classify every vertex in one parallel pass.
+//  * dim 0: each vertex points to its lowest neighbour; pointer jumping gives every vertex its minimum.
+//    Join saddles, in filtration order, merge the minima of their lower-link components with the elder
+//    rule (union-find). The cross edge of a lower-link component is (s, lowest vertex of the component).
+//  * dim 2: the same upside down on the dual graph (tetrahedra joined by triangles, the outside of the box
+//    one node that never dies): each vertex points up, maxima own the last tetrahedron of their star, and
+//    split saddles, in reverse order, replay their lower star's tetrahedra and triangles locally.
+//  * dim 1: the edges left by dim 0 and the triangles left by dim 2 are paired by reducing only the
+//    boundaries of those triangles; a pivot edge paired inside its own lower star is replaced by the rest
+//    of that pair's cone (a path in the lower link), negative edges are compressed away. That needs no
+//    other column until the first birth edge becomes the pivot, so every death triangle gets that far in
+//    parallel (DMS-style); only the ~15% of columns whose pivot is already owned continue sequentially.
+// Everything but that sequential remainder of dim 1 and the union-find merges runs in parallel; every step
+// is deterministic.
+#include "chokeloops/topology/persistence.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+
+#include "persistence_engine.h"
+
+namespace chokeloops {
+
+std::size_t PersistenceDiagram::count(int dim) const {
+  std::size_t n = 0;
+  for (auto& p : pairs) n += p.dim == dim;
+  return n;
+}
+
+namespace detail {
+
+PersistenceDiagram Engine::run() {
+  PersistenceDiagram out;
+  out.dims = grid_.dims;
+  auto t0 = Clock::now();
+  report("classify", 0);
+  classify();
+  jump(desc_);
+  jump(asc_);
+  out.stats.seconds_classify = seconds_since(t0);
+  auto t = Clock::now();
+  report("dim 0", 0.3);
+  dim0(out);
+  out.stats.seconds_dim0 = seconds_since(t);
+  t = Clock::now();
+  report("dim 2", 0.45);
+  dim2(out);
+  out.stats.seconds_dim2 = seconds_since(t);
+  t = Clock::now();
+  report("dim 1", 0.6);
+  dim1(out);
+  out.stats.seconds_dim1 = seconds_since(t);
+  finish(out);
+  out.stats.join_saddles = Id(joins_.size());
+  out.stats.split_saddles = Id(splits_.size());
+  out.stats.minima = minima_;
+  out.stats.maxima = maxima_;
+  out.stats.seconds_total = seconds_since(t0);
+  report("done", 1);
+  return out;
+}
+
+void Engine::classify() {
+  desc_.resize(V_);
+  asc_.resize(V_);
+  const int nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
+  struct Local { std::vector<std::uint32_t> joins, splits; Id minima = 0, maxima = 0; };
+  tbb::enumerable_thread_specific<Local> locals;
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz * ny), [&](const tbb::blocked_range<int>& r) {
+    Local& L = locals.local();
+    for (int row = r.begin(); row != r.end(); ++row) {
+      int j = row % ny, k = row / ny;
+      for (int i = 0; i < nx; ++i) {
+        Id v = cx_.vertex(i, j, k);
+        bool border = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
+        std::uint16_t lower = 0, outside = 0;
+        Id lo = v, hi = v;
+        for (int n = 0; n < 14; ++n) {
+          if (border && !cx_.neighbor_inside({i, j, k}, n)) { outside |= std::uint16_t(1u << n); continue; }
+          Id u = v + delta_[n];
+          if (less(u, v)) {
+            lower |= std::uint16_t(1u << n);
+            if (lo == v || less(u, lo)) lo = u;
+          } else if (hi == v || less(hi, u)) {
+            hi = u;
+          }
+        }
+        std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
+        desc_[v] = std::uint32_t(lo);
+        asc_[v] = outside ? kOutside : std::uint32_t(hi);
+        if (lower == 0) ++L.minima;
+        if (upper == 0) ++L.maxima;
+        if (table_[lower].count >= 2) L.joins.push_back(std::uint32_t(v));
+        if (table_[upper].count >= 2) L.splits.push_back(std::uint32_t(v));
+      }
+    }
+  });
+  for (auto& L : locals) {
+    joins_.insert(joins_.end(), L.joins.begin(), L.joins.end());
+    splits_.insert(splits_.end(), L.splits.begin(), L.splits.end());
+    minima_ += L.minima;
+    maxima_ += L.maxima;
+  }
+  auto by_order = [this](std::uint32_t a, std::uint32_t b) { return less(a, b); };
+  tbb::parallel_sort(joins_.begin(), joins_.end(), by_order);
+  tbb::parallel_sort(splits_.begin(), splits_.end(), [&](std::uint32_t a, std::uint32_t b) { return less(b, a); });
+}
+
+void Engine::jump(std::vector<std::uint32_t>& p) {
+  for (;;) {
+    std::atomic<bool> changed{false};
+    tbb::parallel_for(tbb::blocked_range<Id>(0, V_, 1 << 15), [&](const tbb::blocked_range<Id>& r) {
+      bool ch = false;
+      for (Id v = r.begin(); v != r.end(); ++v) {
+        std::uint32_t a = load(p[v]);
+        if (a == kOutside || a == v) continue;
+        std::uint32_t b = load(p[a]);
+        if (b != a) { store(p[v], b); ch = true; }
+      }
+      if (ch) changed = true;
+    });
+    if (!changed) break;
+  }
+}
+
+void Engine::dim0(PersistenceDiagram& out) {
+  for (std::uint32_t s : joins_) {
+    std::uint16_t lower, outside;
+    masks(s, lower, outside);
+    const auto& comps = table_[lower];
+    std::array<Id, 7> low{};
+    for (int c = 0; c < comps.count; ++c) {
+      Id best = -1;
+      for (unsigned m = comps.masks[c]; m; m &= m - 1) {
+        Id u = s + delta_[__builtin_ctz(m)];
+        if (best < 0 || less(u, best)) best = u;
+      }
+      low[c] = best;
+    }
+    std::sort(low.begin(), low.begin() + comps.count, [this](Id a, Id b) { return less(a, b); });
+    BirthSlots births{s, 0, std::uint32_t(births1_)};
+    for (int c = 1; c < comps.count; ++c) {
+      std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
+      if (r == rs) {
+        births.mask |= std::uint16_t(1u << slot(s, low[c]));
+        ++births1_;
+        continue;
+      }
+      std::uint32_t young = less(r, rs) ? rs : r, old = young == r ? rs : r;
+      desc_[young] = old;
+      Id edge = cx_.edge_id(s, low[c]);
+      PersistencePair p;
+      p.dim = 0;
+      p.birth = f_[young];
+      p.death = f_[s];
+      p.birth_simplex = p.birth_vertex = young;
+      p.death_simplex = edge;
+      p.death_vertex = s;
+      p.death_lobes = {low[0], low[c]};
+      out.pairs.push_back(p);
+    }
+    if (births.mask) birth_list_.push_back(births);
+  }
+  index_birth_list();
+}
+
+void Engine::index_birth_list() {
+  std::size_t cap = 16;
+  while (cap < 2 * birth_list_.size()) cap *= 2;
+  birth_table_.assign(cap, kOutside);
+  for (std::uint32_t i = 0; i < birth_list_.size(); ++i) {
+    std::size_t h = hash_vertex(birth_list_[i].saddle);
+    while (birth_table_[h] != kOutside) h = (h + 1) & (cap - 1);
+    birth_table_[h] = i;
+  }
+}
+
+Id Engine::last_tet(Id m) const {
+  std::array<Id, 3> best{-1, -1, -1};
+  for (auto& tr : link_.triangles) {
+    auto d = sorted_descending(f_, std::array<Id, 3>{m + delta_[tr[0]], m + delta_[tr[1]], m + delta_[tr[2]]});
+    if (best[0] < 0 || simplex_less(f_, best, d)) best = d;
+  }
+  return cx_.tet_id(m, best[0], best[1], best[2]);
+}
+
+void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const {
+  std::uint16_t lower, outside;
+  masks(s, lower, outside);
+  std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
+  const auto& ucomps = table_[upper];
+  std::array<int, 14> comp_of;
+  comp_of.fill(-1);
+  std::array<std::uint32_t, 7> rep{};
+  std::array<std::int64_t, 7> lobe{};
+  for (int c = 0; c < ucomps.count; ++c) {
+    for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
+    rep[c] = (ucomps.masks[c] & outside) ? kOutside : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
+    unsigned in_box = ucomps.masks[c] & ~outside;
+    lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
+  }
+  // Only the star's triangles (link edges) can join nodes: a tetrahedron is born as its own node. In reverse
+  // filtration order they are (order[i], order[j]) for i descending, then j < i descending.
+  std::array<int, 14> order;
+  const int n_lower = lower_slots_in_order(s, lower, order);
+  std::array<int, 31> parent;
+  std::array<int, 31> comp_rep;  // for a root holding an upper component: that component, else -1
+  for (int n = 0; n < 31; ++n) { parent[n] = n; comp_rep[n] = n >= 24 ? n - 24 : -1; }
+  auto node_of = [&](int tri) {
+    auto& t = link_.triangles[tri];
+    for (int q = 0; q < 3; ++q)
+      if (!(lower >> t[q] & 1)) return 24 + comp_of[t[q]];
+    return tri;
+  };
+  auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
+  for (int i = n_lower - 1; i > 0; --i)
+    for (int j = i - 1; j >= 0; --j) {
+      if (!(link_.adjacency[order[i]] >> order[j] & 1)) continue;
+      const int e = link_edge_index_[order[i]][order[j]];
+      const auto& et = link_.edge_triangles[e];
+      int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
+      if (r1 == r2) continue;
+      if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
+        out.push_back({s, std::uint8_t(link_.edges[e][0]), std::uint8_t(link_.edges[e][1]), rep[comp_rep[r1]],
+                       rep[comp_rep[r2]], lobe[comp_rep[r1]], lobe[comp_rep[r2]]});
+      parent[r2] = r1;
+      if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
+    }
+}
+
+void Engine::dim2(PersistenceDiagram& out) {
+  // Cross triangles of all split saddles, computed in parallel, kept in saddle order.
+  const std::size_t chunk = 4096, nchunks = (splits_.size() + chunk - 1) / chunk;
+  std::vector<std::vector<CrossTriangle>> found(nchunks);
+  tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+    for (std::size_t i = c * chunk; i < std::min(splits_.size(), (c + 1) * chunk); ++i)
+      split_saddle_cross_triangles(splits_[i], found[c]);
+  });
+  for (auto& list : found)
+    for (const CrossTriangle& ct : list) {
+      std::uint32_t g1 = find(asc_, root_up(ct.rep1)), g2 = find(asc_, root_up(ct.rep2));
+      Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
+      if (g1 == g2) {
+        auto d = sorted_descending(f_, std::array<Id, 3>{s, a, b});
+        deaths1_.push_back({d, {ct.lobe1, ct.lobe2}});
+        continue;
+      }
+      bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
+      std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
+      asc_[young] = old;
+      PersistencePair p;
+      p.dim = 2;
+      p.birth = f_[s];
+      p.death = f_[young];
+      p.birth_simplex = cx_.triangle_id(s, a, b);
+      p.birth_vertex = s;
+      p.death_simplex = last_tet(young);
+      p.death_vertex = young;
+      p.birth_lobes = {ct.lobe1, ct.lobe2};
+      out.pairs.push_back(p);
+    }
+  std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
+}
+
+void Engine::finish(PersistenceDiagram& out) {
+  Id gmin = 0;
+  for (Id v = 1; v < V_; ++v)
+    if (less(v, gmin)) gmin = v;
+  PersistencePair e;
+  e.dim = 0;
+  e.birth = f_[gmin];
+  e.death = std::numeric_limits<float>::infinity();
+  e.birth_simplex = e.birth_vertex = gmin;
+  out.essential.push_back(e);
+  // Discovery order is deterministic (saddles in filtration order); group by dimension.
+  std::stable_sort(out.pairs.begin(), out.pairs.end(),
+                   [](const PersistencePair& a, const PersistencePair& b) { return a.dim < b.dim; });
+}
+
+}  // namespace detail
+
+PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress) {
+  validate_grid(grid);
+  detail::Engine engine(grid, progress);
+  return engine.run();
+}
+
+void write_pairs_csv(const PersistenceDiagram& diagram, const std::string& path) {
+  std::FILE* fp = std::fopen(path.c_str(), "w");
+  if (!fp) throw Error("cannot write '" + path + "'");
+  std::fprintf(fp, "dim,birth,death\n");
+  for (auto& p : diagram.essential) std::fprintf(fp, "%d,%.9g,inf\n", p.dim, p.birth);
+  for (auto& p : diagram.pairs) std::fprintf(fp, "%d,%.9g,%.9g\n", p.dim, p.birth, p.death);
+  if (std::fclose(fp) != 0) throw Error("cannot write '" + path + "' (disk full?)");
+}
+
+}  // namespace chokeloops

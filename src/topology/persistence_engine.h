@@ -1,0 +1,201 @@
+#pragma once
+// The lower-star persistence engine's state and steps, shared by persistence.cpp (classification, dims 0
+// and 2, the driver) and persistence_dim1.cpp (the dim-1 reduction). Internal: not installed.
+#include <tbb/concurrent_vector.h>
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "chokeloops/topology/complex.h"
+#include "chokeloops/topology/persistence.h"
+#include "link_table.h"
+
+namespace chokeloops::detail {
+
+constexpr std::uint32_t kOutside = 0xFFFFFFFFu;  // the outside of the box: +inf, never dies
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+inline std::uint32_t load(const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); }
+inline void store(std::uint32_t& x, std::uint32_t v) { __atomic_store_n(&x, v, __ATOMIC_RELAXED); }
+
+// An edge with its vertices' values inline, so that ordering a heap of edges reads no field memory.
+struct EdgeKey {
+  float fhi, flo;
+  std::uint32_t hi, lo;
+  bool operator==(const EdgeKey& o) const { return hi == o.hi && lo == o.lo; }
+};
+inline bool edge_less(const EdgeKey& a, const EdgeKey& b) {
+  if (a.hi != b.hi) return a.fhi < b.fhi || (a.fhi == b.fhi && a.hi < b.hi);
+  return a.lo != b.lo && (a.flo < b.flo || (a.flo == b.flo && a.lo < b.lo));
+}
+
+// What a lower-star reduction of vertex v's lower link says about the edges (v, x): x is the root of its
+// lower-link component (a cross edge), or x died in the link's dim-0 persistence when `killer` joined it
+// to the older root `older` (then (v,x) is paired inside the lower star of v).
+struct LowerLinkInfo {
+  std::uint16_t lower = 0;
+  std::int8_t lowest = -1;                 // neighbour slot of the lowest lower neighbour
+  std::array<std::int8_t, 14> killer{};    // link edge index that killed slot n, or -1 for a root
+  std::array<std::int8_t, 14> older{};     // the older root it merged into
+};
+
+// A join saddle's link slots whose edges give birth to 1-cycles; base: the rank of its first such edge.
+struct BirthSlots { std::uint32_t saddle; std::uint16_t mask; std::uint32_t base; };
+
+class Engine {
+ public:
+  Engine(const ScalarGrid& grid, const ProgressFn& progress)
+      : grid_(grid), f_(grid.values.data()), cx_(grid.dims), V_(cx_.vertex_count()), progress_(progress),
+        table_(detail::link_component_table()), link_(freudenthal::vertex_link()) {
+    for (int n = 0; n < 14; ++n) {
+      delta_[n] = cx_.neighbor_delta(n);
+      auto o = freudenthal::neighbor_offset(n);
+      slot_of_offset_[(o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = std::int8_t(n);
+    }
+    for (int e = 0; e < 36; ++e) {
+      link_edge_index_[link_.edges[e][0]][link_.edges[e][1]] = std::int8_t(e);
+      link_edge_index_[link_.edges[e][1]][link_.edges[e][0]] = std::int8_t(e);
+    }
+  }
+
+  PersistenceDiagram run();
+
+ private:
+  void report(const char* stage, double fraction) {
+    if (progress_ && !progress_(stage, fraction)) throw Error("persistence interrupted");
+  }
+  bool less(Id a, Id b) const { return vertex_less(f_, a, b); }
+
+  // Lower mask and out-of-box mask of vertex v's 14 link slots.
+  void masks(Id v, std::uint16_t& lower, std::uint16_t& outside) const {
+    auto c = cx_.coords(v);
+    bool border = c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == grid_.dims[0] - 1 ||
+                  c[1] == grid_.dims[1] - 1 || c[2] == grid_.dims[2] - 1;
+    lower = outside = 0;
+    for (int n = 0; n < 14; ++n) {
+      if (border && !cx_.neighbor_inside(c, n)) { outside |= std::uint16_t(1u << n); continue; }
+      if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
+    }
+  }
+  // The lower link slots of v from lowest to highest; returns how many.
+  int lower_slots_in_order(Id v, std::uint16_t lower, std::array<int, 14>& order) const {
+    int n = 0;
+    for (unsigned m = lower; m; m &= m - 1) order[n++] = __builtin_ctz(m);
+    for (int i = 1; i < n; ++i)
+      for (int j = i; j > 0 && less(v + delta_[order[j]], v + delta_[order[j - 1]]); --j) std::swap(order[j], order[j - 1]);
+    return n;
+  }
+  int slot(Id v, Id x) const {
+    auto a = cx_.coords(v), b = cx_.coords(x);
+    return slot_of_offset_[(b[0] - a[0] + 1) + 3 * (b[1] - a[1] + 1) + 9 * (b[2] - a[2] + 1)];
+  }
+
+  void classify();
+
+  // Every pointer ends at the root of its chain (a minimum, a maximum, or the outside).
+  void jump(std::vector<std::uint32_t>& p);
+
+  std::uint32_t find(std::vector<std::uint32_t>& p, std::uint32_t x) const {
+    while (x != kOutside && p[x] != x) {
+      std::uint32_t up = p[x];
+      if (up != kOutside && p[up] != up) p[x] = p[up];
+      x = p[x];
+    }
+    return x;
+  }
+
+  void dim0(PersistenceDiagram& out);
+
+  // An open-addressing table from join saddle to its entry in birth_list_: one cache miss per lookup.
+  void index_birth_list();
+  std::size_t hash_vertex(std::uint32_t v) const {
+    return (std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> 32) & (birth_table_.size() - 1);
+  }
+  const BirthSlots* birth_slots(Id s) const {
+    for (std::size_t h = hash_vertex(std::uint32_t(s));; h = (h + 1) & (birth_table_.size() - 1)) {
+      std::uint32_t i = birth_table_[h];
+      if (i == kOutside) return nullptr;
+      if (birth_list_[i].saddle == std::uint32_t(s)) return &birth_list_[i];
+    }
+  }
+
+  // The last tetrahedron (in filtration order) of the star of a maximum m.
+  Id last_tet(Id m) const;
+
+  // A triangle of a split saddle's lower star that joins two upper-link components: it either gives
+  // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = a vertex of each component.
+  // lobe = an in-box vertex of each component (-2 if the component lies wholly outside the box).
+  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; std::int64_t lobe1, lobe2; };
+
+  // Replays the lower star of split saddle s on the dual graph, in reverse filtration order, with each
+  // upper-link component as one old node; needs no global state, so all saddles run in parallel.
+  void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const;
+
+  void dim2(PersistenceDiagram& out);
+  std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
+
+  // Thread-safe memo: the first thread to publish an index wins; a loser's copy is identical and unused.
+  const LowerLinkInfo& lower_link(Id v);
+  EdgeKey make_edge(Id a, Id b) const {
+    float fa = f_[a], fb = f_[b];
+    bool a_lower = fa < fb || (fa == fb && a < b);
+    return a_lower ? EdgeKey{fb, fa, std::uint32_t(b), std::uint32_t(a)} : EdgeKey{fa, fb, std::uint32_t(a), std::uint32_t(b)};
+  }
+
+  // Replaces the pivot (v, x), paired inside v's lower star, by the rest of that pair's cone: the edge
+  // (v, older root) and a lower-link path from x to that root through edges no later than the killer.
+  template <class Push>
+  void expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& push);
+
+  // Rank of birth edge (s, x) among all dim-1 birth edges in filtration order: the saddles' order, then
+  // each saddle's lower ends in order.
+  std::uint32_t birth_rank(Id s, Id x) const {
+    const BirthSlots* b = birth_slots(s);
+    std::uint32_t r = b->base;
+    for (unsigned m = b->mask; m; m &= m - 1)
+      if (less(s + delta_[__builtin_ctz(m)], x)) ++r;
+    return r;
+  }
+  bool is_birth_edge(Id s, int slot_of_x) const {
+    const BirthSlots* b = birth_slots(s);
+    return b && (b->mask >> slot_of_x & 1);
+  }
+
+  // Pops the chain's edges from the top until one is a dim-1 birth edge, which is returned (popped): an edge
+  // paired inside its own lower star is replaced by the rest of that pair's cone (this adds a boundary, so
+  // the pivot is the one the full boundary matrix gives); a negative edge is dropped (compression).
+  template <class Heap>
+  bool pop_to_birth_pivot(Heap& heap, EdgeKey& p);
+  // Appends the pivot and the rest of the chain, descending, cancelling pairs.
+  template <class Heap>
+  static void drain(Heap& heap, const EdgeKey& pivot, std::vector<EdgeKey>& out);
+
+  void dim1(PersistenceDiagram& out);
+
+  void finish(PersistenceDiagram& out);
+
+  const ScalarGrid& grid_;
+  const float* f_;
+  FreudenthalComplex cx_;
+  Id V_;
+  ProgressFn progress_;
+  const std::vector<detail::LinkComponents>& table_;
+  const freudenthal::Link& link_;
+  std::array<Id, 14> delta_{};
+  std::array<std::int8_t, 27> slot_of_offset_{};
+  std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
+  std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
+  Id minima_ = 0, maxima_ = 0;
+  std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
+  std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
+  std::size_t births1_ = 0;
+  struct Death1 { std::array<Id, 3> v; std::array<Id, 2> lobes; };  // v: highest to lowest vertex
+  std::vector<Death1> deaths1_;
+  std::vector<std::uint32_t> link_index_;  // per vertex: index into link_infos_, or kOutside if not computed
+  tbb::concurrent_vector<LowerLinkInfo> link_infos_;
+};
+
+}  // namespace chokeloops::detail
