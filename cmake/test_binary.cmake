@@ -9,7 +9,7 @@ function(chokeloops_add_test_binary name library discovery_timeout test_timeout)
   target_link_libraries(${name} PRIVATE ${library} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE
     CHOKELOOPS_CLI="$<TARGET_FILE:chokeloops>"
-    CHOKELOOPS_SHARED_DATA="${PROJECT_SOURCE_DIR}/../shared/data")
+    CHOKELOOPS_DATA="${PROJECT_SOURCE_DIR}/data")
   add_dependencies(${name} chokeloops)
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT ${discovery_timeout} PROPERTIES TIMEOUT ${test_timeout})
 endfunction()

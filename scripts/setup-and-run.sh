@@ -4,4 +4,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
-./build/chokeloops analyze data/kitten.obj -o out/kitten --png out/kitten.png "$@"
+./build/chokeloops analyze data/meshes/kitten_niagara.obj -o out/kitten --png out/kitten.png "$@"
