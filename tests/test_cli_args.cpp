@@ -32,10 +32,10 @@ std::string read_and_remove(const fs::path& file) {
   return s.str();
 }
 
-Outcome run_cli(const std::string& args) {
+Outcome run_cli(const std::string& args, const std::string& environment = "") {
   const std::string stem = "chokeloops_cli_args_" + std::to_string(::getpid());
   fs::path out = fs::temp_directory_path() / (stem + ".out"), err = fs::temp_directory_path() / (stem + ".err");
-  std::string cmd = std::string("'") + CHOKELOOPS_CLI + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  std::string cmd = environment + (environment.empty() ? "" : " ") + std::string("'") + CHOKELOOPS_CLI + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
   int status = std::system(cmd.c_str());
   Outcome o;
   o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -121,3 +121,18 @@ TEST(CliAnalyze, SummaryNamesTheStrongestFilteredCandidate) {
 }
 
 }  // namespace
+
+TEST(CliAnalyze, AFailedSelfCheckIsReportedAsABugWithItsOwnExitCode) {
+  // A failed internal check is not bad input: exit 4, one line that says it is a bug and names the input.
+  const std::string model = std::string(CHOKELOOPS_DATA) + "/meshes/kitten_euclid.off";
+  const fs::path dir = fs::temp_directory_path() / ("chokeloops_fault_" + std::to_string(::getpid()));
+  Outcome o = run_cli("analyze '" + model + "' -o '" + dir.string() + "' --resolution 48 --quiet");
+  ASSERT_EQ(o.code, 0) << o.err;
+  o = run_cli("analyze '" + model + "' -o '" + dir.string() + "' --resolution 48 --quiet", "CHOKELOOPS_TEST_FAULT=self-check");
+  EXPECT_EQ(o.code, 4);
+  EXPECT_EQ(lines(o.err), 1) << o.err;
+  EXPECT_NE(o.err.find("internal error (a bug"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("kitten_euclid.off"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("please report it"), std::string::npos) << o.err;
+  fs::remove_all(dir);
+}

@@ -159,7 +159,8 @@ TEST(Shorten, DoubleTorusHandleMeridianStaysEssential) {
 }
 
 TEST(Shorten, CostFollowsTheLoopNotTheMesh) {
-  // 256^3 torus (about a million faces): shortening one meridian takes a small fraction of a second.
+  // 256^3 torus (about a million faces): shortening one meridian touches a band around it, not the mesh.
+  // (Its time is measured in bench/, not asserted here.)
   const double R = 0.3, r = 0.12;
   auto m = extract_zero_surface(sample_field({256, 256, 256}, analytic::torus(R, r)));
   auto adj = build_adjacency(m);
@@ -170,7 +171,8 @@ TEST(Shorten, CostFollowsTheLoopNotTheMesh) {
   std::printf("256^3 meridian (%zu faces): %.4f -> %.4f (target %.4f) in %.3f s, swaps %d\n", m.faces.size(),
               res.input_length, res.length, 2 * M_PI * r, sec, res.swaps);
   EXPECT_NEAR(res.length, 2 * M_PI * r, 0.01 * 2 * M_PI * r);
-  EXPECT_LT(sec, 1.5);
+  EXPECT_LE(res.rings, 8);
+  EXPECT_LT(res.strip_faces.size(), m.faces.size() / 200);
 }
 
 TEST(Shorten, DumbbellNeckLoopIsKeptAroundTheNeck) {

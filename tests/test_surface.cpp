@@ -145,8 +145,8 @@ TEST(Surface, DeterministicAcrossThreadCounts) {
   EXPECT_EQ(a.vertex_edge, b.vertex_edge);
 }
 
-TEST(Surface, Extracts256CubedQuickly) {
-  // A gyroid with 8 periods across the box: several million triangles.
+TEST(Surface, Extracts256CubedGyroidAsAClosedManifold) {
+  // A gyroid with 8 periods across the box: several million triangles (its time is bench_analyze's surface stage).
   auto gyroid = [](double x, double y, double z) {
     const double w = 2 * M_PI * 8;
     return std::sin(w * x) * std::cos(w * y) + std::sin(w * y) * std::cos(w * z) + std::sin(w * z) * std::cos(w * x);
@@ -157,7 +157,6 @@ TEST(Surface, Extracts256CubedQuickly) {
   double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("256^3 gyroid: %zu vertices, %zu faces in %.3f s\n", m.vertices.size(), m.faces.size(), sec);
   EXPECT_GT(m.faces.size(), 2000000u);
-  EXPECT_LT(sec, 4.0);  // 0.48 s on an idle 2-core machine, ~2 s with four builds running; room for load
   auto s = surface_stats(m);
   EXPECT_EQ(s.nonmanifold_edges, 0);
   EXPECT_EQ(s.nonmanifold_vertices, 0);

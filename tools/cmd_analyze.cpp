@@ -24,6 +24,8 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
                             a closed input mesh's genus and components (up to 1024 or --max-memory)
   --voxel-size H            voxel size in input units (instead of --resolution)
   --margin M                padding around the object, input units (default: 10% of its longest side)
+  --keep-values             .vdb level set: use its values as given, even where they are not the distance
+                            to its zero level set (default: such values, e.g. of CSG fields, are recomputed)
   --dmax X                  how deep/far to look for additional loops: percentage of R_in (handles) /
                             R_out (tunnels), e.g. 50%, or a length in input units (default 50%)
   --min-persistence Y       minimum persistence of additional loops, same units (default 10%)
@@ -37,7 +39,7 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
-Exit codes: 0 success, 2 bad input, 3 out of resources.
+Exit codes: 0 success, 2 bad input, 3 out of resources, 4 internal error (a bug: please report it).
 )";
 
 // Stage names and a bar on stderr, shown once the run has taken more than a second.
@@ -85,6 +87,7 @@ int run(std::vector<std::string> args) {
       options.levelset.voxel_size = in.number();
       if (!(options.levelset.voxel_size > 0)) throw Error("--voxel-size must be positive");
     } else if (in.is("--margin")) options.levelset.margin = in.number();
+    else if (in.is("--keep-values")) options.levelset.keep_values = true;
     else if (in.is("--dmax")) options.chokes.d_max = Threshold::parse(in.value());
     else if (in.is("--min-persistence")) options.chokes.min_persistence = Threshold::parse(in.value());
     else if (in.is("--side")) {

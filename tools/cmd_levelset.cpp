@@ -29,6 +29,7 @@ const char* kUsage =
     "                        (default: max(10% of the longest side, 4 voxels))\n"
     "  --iso V               iso value for fog/density .vdb input (default 0.5)\n"
     "  --grid NAME           which grid of a .vdb input (default: the first float grid)\n"
+    "  --keep-values         .vdb level set: keep its values even where they are not its distance (CSG)\n"
     "  --max-memory BYTES    refuse grids needing more (e.g. 8G, 512M; default 80% of physical memory)\n"
     "  --no-fill-holes       do not close holes of open meshes (sign then from the winding number)\n"
     "  -q, --quiet           print only warnings and errors\n"
@@ -60,6 +61,8 @@ int run(std::vector<std::string> args) {
       o.iso = in.number();
     } else if (in.is("--grid")) {
       o.grid_name = in.value();
+    } else if (in.is("--keep-values")) {
+      o.keep_values = true;
     } else if (in.is("--max-memory")) {
       o.max_memory = parse_bytes(in.value());
     } else if (in.is("--no-fill-holes")) {

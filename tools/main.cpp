@@ -35,6 +35,13 @@ int main(int argc, char** argv) {
     } catch (const Error& e) {
       std::cerr << "chokeloops " << name << ": error: " << e.what() << "\n";
       return e.exit_code;
+    } catch (const InternalError& e) {
+      std::string command_line = "chokeloops";
+      for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
+      std::cerr << "chokeloops " << name << ": internal error (a bug in chokeloops, not a problem with the input): "
+                << e.what() << "; please report it with the input file and the command line `" << command_line
+                << "`\n";
+      return kInternalErrorExitCode;
     } catch (const std::bad_alloc&) {
       std::cerr << "chokeloops " << name << ": error: out of memory; use a coarser --resolution\n";
       return 3;

@@ -16,6 +16,13 @@ struct Error : std::runtime_error {
   explicit Error(const std::string& msg, int code = 2) : std::runtime_error(msg), exit_code(code) {}
 };
 
+// A failed internal self-check: a bug in chokeloops, never the user's input. The CLI exits with
+// kInternalErrorExitCode and asks for a report naming the input; a library caller can tell it from Error.
+struct InternalError : std::logic_error {
+  explicit InternalError(const std::string& msg) : std::logic_error(msg) {}
+};
+constexpr int kInternalErrorExitCode = 4;
+
 struct ScalarGrid {
   std::array<int, 3> dims{0, 0, 0};          // number of vertices along x, y, z
   std::array<double, 3> origin{0, 0, 0};     // world position of vertex (0,0,0)

@@ -45,6 +45,8 @@ using Clock = std::chrono::steady_clock;
 // ~0.1 s of band expansion at 256 but its near-surface error (0.16 voxel at 128^3, vs 0.02) is enough
 // for a fertility_vmas membrane not to close (ManifestMeshes test).
 constexpr float kBandVoxels = 3.0f;
+// A level set whose values are further than this from the exact distance to its zero level set is redistanced.
+constexpr double kDistanceToleranceVoxels = 1.0;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 bool timing_enabled() {
@@ -529,6 +531,49 @@ void redistance_from_signs(ScalarGrid& g, const std::vector<std::uint8_t>& known
   detail::complete_by_feature_transform(g, known, sites);
 }
 
+// A level set can be a distance near its surface only: min/max (CSG) of exact distances, a narrow band
+// grown by another tool. Its eikonal residual is fine almost everywhere, so the one test that catches it is
+// the exact distance to its own zero level set, computed over the whole box and compared at every vertex
+// whose value the input gave. Beyond one voxel anywhere, the exact distance replaces the input's values
+// (their signs, and so the surface, are kept).
+void replace_values_that_are_not_the_distance(LevelSetResult& res, const std::vector<std::uint8_t>& known, double h,
+                                               const std::string& who) {
+  ScalarGrid exact = res.grid;
+  redistance_from_signs(exact);
+  const std::size_t n = exact.values.size();
+  struct Deviation {
+    double max = 0;
+    std::size_t over = 0, compared = 0;
+  };
+  const Deviation d = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), Deviation{},
+      [&](const tbb::blocked_range<std::size_t>& r, Deviation acc) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v) {
+          if (!known.empty() && !known[v]) continue;
+          const double e = std::abs(double(res.grid.values[v]) - double(exact.values[v])) / h;
+          acc.max = std::max(acc.max, e);
+          acc.over += e > kDistanceToleranceVoxels;
+          ++acc.compared;
+        }
+        return acc;
+      },
+      [](Deviation a, const Deviation& b) {
+        a.max = std::max(a.max, b.max);
+        a.over += b.over;
+        a.compared += b.compared;
+        return a;
+      });
+  res.max_distance_error_voxels = d.max;
+  if (d.over == 0) return;
+  std::ostringstream s;
+  s << who << ": values are the distance to the zero level set only near it (" << d.over << " of " << d.compared
+    << " vertices are more than " << kDistanceToleranceVoxels << " voxel off, up to " << d.max
+    << " voxels: a min/max (CSG) field?); recomputed as the exact distance (--keep-values uses them as given)";
+  res.warnings.push_back(s.str());
+  res.source = "vdb level set (redistanced: not a distance far from the surface)";
+  res.grid.values = std::move(exact.values);
+}
+
 }  // namespace
 
 LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const LevelSetOptions& o, const std::string& name) {
@@ -629,6 +674,7 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
     }
   }
   if (known_count < res.grid.values.size()) redistance_from_signs(res.grid, known);
+  if (!redistance && !fog && !o.keep_values) replace_values_that_are_not_the_distance(res, known, h, who);
   if (o.keep_vdb) {
     res.vdb = grid_from_dense(res.grid, true);
     res.vdb->setName(input->getName().empty() ? "sdf" : input->getName());

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 
 #include "chokeloops/surface/mesh_adjacency.h"
@@ -75,8 +76,11 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   r.surface = extract_zero_surface(r.grid);
   r.surface_stats = surface_stats(r.surface);
   r.timings_ms["surface"] = ms_since(t);
-  if (r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold)
-    throw std::logic_error("surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
+  // CHOKELOOPS_TEST_FAULT=self-check makes this check fail, so that tests can see how a bug is reported.
+  const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
+  const bool injected = fault && std::string(fault) == "self-check";
+  if ((r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold) || injected)
+    throw InternalError("self-check failed: surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
                            std::to_string(r.chokes.handle_generators) + " handle generators");
   if (!r.surface_stats.closed_manifold)
     r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "chokeloops/grid.h"
+
 namespace chokeloops {
 
 void validate_grid(const ScalarGrid& grid) {
@@ -46,7 +48,7 @@ const Link& vertex_link() {
         for (int c = b + 1; c < 14; ++c)
           if ((L.adjacency[a] >> b & 1) && (L.adjacency[a] >> c & 1) && (L.adjacency[b] >> c & 1))
             L.triangles[nt++] = {a, b, c};
-    if (ne != 36 || nt != 24) throw std::logic_error("Freudenthal link is not a 14-vertex sphere");
+    if (ne != 36 || nt != 24) throw InternalError("Freudenthal link is not a 14-vertex sphere");
     for (int e = 0; e < 36; ++e) {
       int n = 0;
       for (int t = 0; t < 24; ++t) {
@@ -55,7 +57,7 @@ const Link& vertex_link() {
                    (tr[0] == L.edges[e][1] || tr[1] == L.edges[e][1] || tr[2] == L.edges[e][1]);
         if (hits == 2) L.edge_triangles[e][n++] = t;
       }
-      if (n != 2) throw std::logic_error("Freudenthal link edge is not shared by two triangles");
+      if (n != 2) throw InternalError("Freudenthal link edge is not shared by two triangles");
     }
     return L;
   }();

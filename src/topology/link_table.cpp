@@ -1,5 +1,7 @@
 #include "link_table.h"
 
+#include "chokeloops/grid.h"
+
 #include <stdexcept>
 
 #include "chokeloops/topology/complex.h"
@@ -22,7 +24,7 @@ const std::vector<LinkComponents>& link_component_table() {
           comp |= grow;
           frontier |= grow;
         }
-        if (c.count == c.masks.size()) throw std::logic_error("link subset with more than 7 components");
+        if (c.count == c.masks.size()) throw InternalError("link subset with more than 7 components");
         c.masks[c.count++] = std::uint16_t(comp);
         left &= ~comp;
       }

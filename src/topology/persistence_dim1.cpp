@@ -72,7 +72,7 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
       queue[tail++] = b;
     }
   }
-  if (prev[target] == -2) throw std::logic_error("lower-link path not found in dim-1 reduction");
+  if (prev[target] == -2) throw InternalError("lower-link path not found in dim-1 reduction");
   push(make_edge(v, v + delta_[target]));
   for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
 }
@@ -112,7 +112,7 @@ void Engine::drain(Heap& heap, const EdgeKey& pivot, std::vector<EdgeKey>& out) 
 
 void Engine::dim1(PersistenceDiagram& out) {
   if (births1_ != deaths1_.size())
-    throw std::logic_error("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
+    throw InternalError("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                            std::to_string(deaths1_.size()) + ")");
   link_index_.assign(V_, kOutside);
   auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
@@ -156,7 +156,7 @@ void Engine::dim1(PersistenceDiagram& out) {
   Heap heap(heap_less);
   for (std::size_t i = 0; i < n; ++i) {
     const Where& w = where[i];
-    if (w.begin == w.end) throw std::logic_error("a dim-1 death triangle reduced to zero");
+    if (w.begin == w.end) throw InternalError("a dim-1 death triangle reduced to zero");
     Span column{first[w.chunk].data() + w.begin, first[w.chunk].data() + w.end};
     EdgeKey p = *column.begin;
     std::uint32_t r = birth_rank(p.hi, p.lo);
@@ -164,7 +164,7 @@ void Engine::dim1(PersistenceDiagram& out) {
       for (const EdgeKey* e = column.begin + 1; e != column.end; ++e) heap.push(*e);
       for (;;) {
         for (const EdgeKey* e = owner[r].begin + 1; e != owner[r].end; ++e) heap.push(*e);
-        if (!pop_to_birth_pivot(heap, p)) throw std::logic_error("a dim-1 death triangle reduced to zero");
+        if (!pop_to_birth_pivot(heap, p)) throw InternalError("a dim-1 death triangle reduced to zero");
         r = birth_rank(p.hi, p.lo);
         if (!owner[r].begin) break;
       }

@@ -21,6 +21,8 @@ struct LevelSetOptions {
   bool quiet = false;           // library: do not print warnings to stderr (they are in the result anyway)
   std::string grid_name;        // .vdb input: which grid ("" = first float grid)
   bool fill_holes = true;       // close holes of open meshes with CGAL (triangulate_hole) before taking the sign
+  bool keep_values = false;     // .vdb level set: use its values as given, even where they are not the distance
+                                // to its zero level set (by default such values are recomputed: CSG fields)
   bool keep_vdb = false;        // also build result.vdb (FloatGrid of the whole box; same as grid_from_dense(grid))
   bool stage_memory = false;    // record each stage's peak RSS (resets the process's VmHWM: benchmarks only)
 };
@@ -42,6 +44,7 @@ struct LevelSetResult {
   std::size_t inside_voxels = 0;        // vertices with phi < 0
   std::size_t outside_voxels = 0;       // vertices with phi >= 0
   double margin = 0;                    // padding used, input units
+  double max_distance_error_voxels = -1;  // .vdb level set: largest |value - exact distance| found (-1: not checked)
   double seconds = 0;                   // wall time of make_levelset
   std::vector<LevelSetStage> stages;    // in order; CHOKELOOPS_LEVELSET_TIMING=1 also prints them
 };
@@ -56,8 +59,9 @@ LevelSetResult make_levelset(const std::string& input_path, const LevelSetOption
 LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions& options = {},
                                 const std::string& name = "mesh");
 
-// A FloatGrid from a .vdb: a level set is used as is when |grad phi| ~ 1 near the surface, otherwise
-// redistanced from its zero crossings; a fog volume becomes a signed distance at options.iso (fogToSdf).
+// A FloatGrid from a .vdb: a level set is used as is when its values are the distance to its own zero
+// level set over the whole box (within a voxel of the exact distance; LevelSetOptions::keep_values skips the
+// check), otherwise redistanced from its zero crossings: min/max (CSG) fields are exact only near the surface; a fog volume becomes a signed distance at options.iso (fogToSdf).
 // What the input does not cover of the padded box gets the exact feature transform's distance to the
 // zero crossings.
 LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr grid, const LevelSetOptions& options = {},
