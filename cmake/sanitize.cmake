@@ -20,7 +20,7 @@ target_compile_definitions(chokeloops_input PUBLIC CHOKELOOPS_VERSION="${PROJECT
   CHOKELOOPS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 target_compile_options(chokeloops_input PUBLIC ${CHOKELOOPS_SANITIZE_FLAGS})
 target_link_options(chokeloops_input PUBLIC -fsanitize=address,undefined)
-target_link_libraries(chokeloops_input PUBLIC TBB::tbb OpenVDB::openvdb Eigen3::Eigen CGAL::CGAL)
+target_link_libraries(chokeloops_input PUBLIC ${CHOKELOOPS_INPUT_LINK_LIBRARIES})
 
 add_executable(chokeloops ${PROJECT_SOURCE_DIR}/tools/main.cpp ${PROJECT_SOURCE_DIR}/tools/cmd_levelset.cpp
   ${PROJECT_SOURCE_DIR}/tools/args.cpp ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)

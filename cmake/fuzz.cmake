@@ -1,0 +1,29 @@
+# CHOKELOOPS_FUZZ=ON (with CXX=clang++): libFuzzer harnesses for every input reader, fuzz/fuzz_*.cpp, over
+# the input stage (src/io, src/field) built with -fsanitize=fuzzer-no-link,address,undefined. Run them
+# with scripts/fuzz.sh. Included from the top CMakeLists.txt, which then stops (no other targets).
+
+if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  message(FATAL_ERROR "CHOKELOOPS_FUZZ needs clang (libFuzzer): configure with CXX=clang++")
+endif()
+set(CHOKELOOPS_FUZZ_FLAGS -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+  -fno-sanitize-recover=undefined)
+file(GLOB CHOKELOOPS_FUZZ_INPUT_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/io/*.cpp
+  ${PROJECT_SOURCE_DIR}/src/field/*.cpp)
+add_library(chokeloops_fuzz_input STATIC ${CHOKELOOPS_FUZZ_INPUT_SOURCES})
+target_include_directories(chokeloops_fuzz_input PUBLIC ${PROJECT_SOURCE_DIR}/include PRIVATE ${PROJECT_SOURCE_DIR}/src)
+target_compile_definitions(chokeloops_fuzz_input PUBLIC CHOKELOOPS_VERSION="${PROJECT_VERSION}"
+  CHOKELOOPS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_compile_options(chokeloops_fuzz_input PUBLIC ${CHOKELOOPS_FUZZ_FLAGS})
+target_link_libraries(chokeloops_fuzz_input PUBLIC ${CHOKELOOPS_INPUT_LINK_LIBRARIES})
+
+function(chokeloops_add_fuzzer name source)
+  add_executable(${name} ${source})
+  target_link_libraries(${name} PRIVATE chokeloops_fuzz_input)
+  target_link_options(${name} PRIVATE -fsanitize=fuzzer,address,undefined)
+  target_compile_definitions(${name} PRIVATE ${ARGN})
+endfunction()
+
+foreach(ext obj ply off stl)
+  chokeloops_add_fuzzer(fuzz_${ext} ${PROJECT_SOURCE_DIR}/fuzz/fuzz_mesh_reader.cpp CHOKELOOPS_FUZZ_EXT=".${ext}")
+endforeach()
+chokeloops_add_fuzzer(fuzz_vdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_vdb_reader.cpp)
