@@ -12,6 +12,7 @@ SECONDS_PER="${1:-60}"
 shift || true
 NAMES=("$@")
 [ ${#NAMES[@]} -gt 0 ] || NAMES=($(cd "$ROOT/fuzz/corpus" && ls))
+bash "$ROOT/scripts/install-deps.sh" fuzz >/dev/null
 CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Debug -DCHOKELOOPS_FUZZ=ON >"$BUILD.log" 2>&1 ||
   { tail -20 "$BUILD.log"; exit 1; }
 cmake --build "$BUILD" -j"${JOBS:-2}" $(printf -- '--target fuzz_%s ' "${NAMES[@]}") >>"$BUILD.log" 2>&1 ||

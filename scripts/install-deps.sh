@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs exactly the Debian 12 packages chokeloops needs to build, test and benchmark.
-# Idempotent; run as root (or with sudo available).
+# Idempotent; run as root (or with sudo available). `install-deps.sh fuzz` adds clang and libFuzzer
+# (scripts/fuzz.sh).
 set -euo pipefail
 PKGS=(
   build-essential cmake pkg-config git
@@ -11,6 +12,7 @@ PKGS=(
   nlohmann-json3-dev
   chromium
 )
+if [ "${1:-}" = fuzz ]; then PKGS+=(clang libfuzzer-14-dev); fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
