@@ -343,7 +343,7 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
   // All of OpenVDB's clean-up stays on: intersecting-voxel removal and renormalisation both decide signs
   // (without renormalisation bunny_npm and david at 256 gain a spurious handle: ManifestMeshes tests).
   const int flags = 0;
-  openvdb::Int32Grid index_grid(openvdb::Int32(openvdb::util::INVALID_IDX));
+  openvdb::Int32Grid index_grid(static_cast<openvdb::Int32>(openvdb::util::INVALID_IDX));
   openvdb::FloatGrid::Ptr sdf =
       openvdb::tools::meshToVolume<openvdb::FloatGrid>(adapter, *xf, band, band, flags, &index_grid);
   stage.done("band+sign (meshToVolume)");
