@@ -1,0 +1,206 @@
+// Steps 1 and 2 of shorten_loop: the annulus band of faces around the loop with a cut across it, and the
+// shortest edge loop in the band in the loop's class (Dijkstra in the band's truncated cyclic cover).
+#include <algorithm>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <queue>
+#include <utility>
+
+#include "shortener.h"
+
+namespace chokeloops::shorten_detail {
+
+// ---- Step 1: band --------------------------------------------------------------------------------
+
+bool Shortener::build_band(const std::vector<int>& region, const std::unordered_map<int, int>& rid,
+                           const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop) {
+  Band B;
+  auto allowed_vertex = [&](int v) { auto it = rid.find(v); return it != rid.end() && allowed[it->second]; };
+  auto near_loop = [&](int v) { auto it = rid.find(v); return it == rid.end() ? 0 : int(near[it->second]); };
+  // Collect faces around allowed vertices.
+  std::vector<int> cand;
+  for (size_t i = 0; i < region.size(); ++i)
+    if (allowed[i])
+      for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) cand.push_back(adj.vf[j]);
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  for (int f : cand) {
+    auto& t = mesh.faces[f];
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) ok = ok && (allowed_vertex(t[k]) || near_loop(t[k]));
+    if (!ok) continue;
+    // faces touching the loop are always allowed; others need all vertices allowed
+    if (!(allowed_vertex(t[0]) && allowed_vertex(t[1]) && allowed_vertex(t[2]))) {
+      bool touches = near_loop(t[0]) == 2 || near_loop(t[1]) == 2 || near_loop(t[2]) == 2;
+      if (!touches) continue;
+    }
+    B.in_face.insert(f);
+    B.faces.push_back(f);
+  }
+  if (B.faces.empty()) return false;
+  for (int f : B.faces)
+    for (int k = 0; k < 3; ++k) {
+      int v = mesh.faces[f][k];
+      if (B.local.emplace(v, int(B.global.size())).second) B.global.push_back(v);
+    }
+  band = std::move(B);
+  Band& b = band;
+  // Euler characteristic, boundary, fans.
+  std::int64_t V = std::int64_t(b.global.size()), F = std::int64_t(b.faces.size()), E = 0;
+  std::vector<int> faces_at(V, 0), interior_at(V, 0), boundary_at(V, 0);
+  std::vector<int> bparent(V);
+  std::iota(bparent.begin(), bparent.end(), 0);
+  auto find = [&](int x) { while (bparent[x] != x) x = bparent[x] = bparent[bparent[x]]; return x; };
+  for (int f : b.faces)
+    for (int k = 0; k < 3; ++k) {
+      int h = 3 * f + k, t = adj.twin[h];
+      int a = b.local.at(vert(h)), c = b.local.at(vert_to(h));
+      ++faces_at[a];
+      bool interior = t >= 0 && face_in(t / 3);
+      if (interior) {
+        if (h < t) {
+          ++E;
+          ++interior_at[a], ++interior_at[c];
+        }
+      } else {
+        ++E;
+        ++boundary_at[a], ++boundary_at[c];
+        bparent[find(a)] = find(c);
+      }
+    }
+  if (V - E + F != 0) return false;
+  int boundary_components = 0;
+  for (int v = 0; v < V; ++v) {
+    if (boundary_at[v] != 0 && boundary_at[v] != 2) return false;
+    int fans = boundary_at[v] ? faces_at[v] - interior_at[v] : 1;
+    if (fans != 1) return false;
+    if (boundary_at[v] && find(v) == v) ++boundary_components;
+  }
+  if (boundary_components != 2) return false;
+  // Connected (face flood).
+  {
+    std::vector<int> stack{b.faces[0]};
+    std::vector<char> seen(mesh.faces.size(), 0);
+    seen[b.faces[0]] = 1;
+    size_t reached = 1;
+    while (!stack.empty()) {
+      int f = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        int t = adj.twin[3 * f + k];
+        if (t >= 0 && face_in(t / 3) && !seen[t / 3]) seen[t / 3] = 1, ++reached, stack.push_back(t / 3);
+      }
+    }
+    if (reached != b.faces.size()) return false;
+  }
+  // Cut: BFS over band faces from faces on boundary curve A to a face on boundary curve B.
+  int rootA = -1;
+  for (int v = 0; v < V && rootA < 0; ++v)
+    if (boundary_at[v]) rootA = find(v);
+  // Boundary half-edge of f on the given curve, or -1.
+  auto on_curve = [&](int f, bool curveA) {
+    for (int k = 0; k < 3; ++k) {
+      int h = 3 * f + k, t = adj.twin[h];
+      if (t >= 0 && face_in(t / 3)) continue;
+      bool isA = find(b.local.at(vert(h))) == rootA;
+      if (isA == curveA) return h;
+    }
+    return -1;
+  };
+  std::unordered_map<int, int> parent_h;  // face -> half-edge (in the parent face) crossed to reach it
+  std::queue<int> q;
+  for (int f : b.faces)
+    if (on_curve(f, true) >= 0) parent_h[f] = -1, q.push(f);
+  int target = -1;
+  while (!q.empty() && target < 0) {
+    int f = q.front();
+    q.pop();
+    if (on_curve(f, false) >= 0) { target = f; break; }
+    for (int k = 0; k < 3; ++k) {
+      int h = 3 * f + k, t = adj.twin[h];
+      if (t < 0 || !face_in(t / 3) || parent_h.count(t / 3)) continue;
+      parent_h[t / 3] = h;
+      q.push(t / 3);
+    }
+  }
+  if (target < 0) return false;
+  // The cut runs from the midpoint of a boundary edge on curve A through the faces to the midpoint of
+  // one on curve B; those two boundary edges count as crossed too (a loop along the boundary around
+  // the cut's end would otherwise wind once).
+  auto set_sign = [&](int h, int sg) {
+    b.sign[h] = sg;
+    if (adj.twin[h] >= 0) b.sign[adj.twin[h]] = -sg;
+  };
+  set_sign(on_curve(target, false), +1);
+  int f = target;
+  b.cut_vertices.clear();
+  for (; parent_h[f] >= 0; f = parent_h[f] / 3) {
+    set_sign(parent_h[f], +1);
+    b.cut_vertices.push_back(b.local.at(vert(parent_h[f])));
+  }
+  set_sign(on_curve(f, true), -1);
+  int w = 0;
+  for (size_t i = 0; i < loop.size(); ++i) w += signed_edge_sign(loop[i], loop[(i + 1) % loop.size()]);
+  b.winding = w;
+  return w == 1 || w == -1;
+}
+
+// ---- Step 2: shortest edge loop in the band ------------------------------------------------------
+
+void Shortener::build_arcs() {
+  std::vector<std::vector<Arc>> tmp(band.global.size());
+  for (int f : band.faces)
+    for (int k = 0; k < 3; ++k) {
+      int h = 3 * f + k;
+      int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
+      double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
+      int s = hsign(h);
+      tmp[a].push_back({c, L, s});
+      tmp[c].push_back({a, L, -s});
+    }
+  arc_start.assign(tmp.size() + 1, 0);
+  arcs.clear();
+  for (size_t v = 0; v < tmp.size(); ++v) {
+    std::sort(tmp[v].begin(), tmp[v].end(), [](const Arc& x, const Arc& y) { return x.to < y.to || (x.to == y.to && x.sign < y.sign); });
+    tmp[v].erase(std::unique(tmp[v].begin(), tmp[v].end(), [](const Arc& x, const Arc& y) { return x.to == y.to && x.sign == y.sign; }), tmp[v].end());
+    arcs.insert(arcs.end(), tmp[v].begin(), tmp[v].end());
+    arc_start[v + 1] = int(arcs.size());
+  }
+}
+
+std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
+  const int NL = 7, L0 = 3;  // sheets -3..3
+  const int n = int(band.global.size());
+  std::vector<double> d(size_t(n) * NL, std::numeric_limits<double>::infinity());
+  std::vector<int> from(size_t(n) * NL, -1);
+  using QE = std::pair<double, int>;
+  std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
+  int src = s * NL + L0, dst = s * NL + L0 + band.winding;
+  d[src] = 0;
+  q.push({0, src});
+  while (!q.empty()) {
+    auto [dv, node] = q.top();
+    q.pop();
+    if (dv > d[node]) continue;
+    if (node == dst) break;
+    int v = node / NL, layer = node % NL;
+    for (int i = arc_start[v]; i < arc_start[v + 1]; ++i) {
+      int nl = layer + arcs[i].sign;
+      if (nl < 0 || nl >= NL) continue;
+      int w = arcs[i].to * NL + nl;
+      double nd = dv + arcs[i].len;
+      if (nd < d[w]) d[w] = nd, from[w] = node, q.push({nd, w});
+    }
+  }
+  if (std::isinf(d[dst])) { length = std::numeric_limits<double>::infinity(); return {}; }
+  length = d[dst];
+  std::vector<int> path;
+  for (int node = dst; node != src; node = from[node]) path.push_back(band.global[node / NL]);
+  std::reverse(path.begin(), path.end());  // starts after s, ends with s
+  std::rotate(path.begin(), path.end() - 1, path.end());
+  return path;
+}
+
+}  // namespace chokeloops::shorten_detail

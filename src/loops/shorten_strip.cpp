@@ -1,0 +1,392 @@
+// Step 3 of shorten_loop: the triangle strip around the edge loop, the funnel algorithm through its
+// unfolding, Gauss-Seidel polishing of the portal crossings and strip side swaps at apexes below pi.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "shortener.h"
+
+namespace chokeloops::shorten_detail {
+
+namespace {
+
+struct P2 { double x, y; };
+
+double len2(P2 a, P2 b) { return std::hypot(a.x - b.x, a.y - b.y); }
+// Mononen's triarea2: > 0 when c lies to the right of a->b (y up).
+double triarea2(P2 a, P2 b, P2 c) { return (c.x - a.x) * (b.y - a.y) - (b.x - a.x) * (c.y - a.y); }
+bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
+
+}  // namespace
+
+bool Shortener::fan(int a, int p, int b, bool left, std::vector<int>& out, double& angle) const {
+  out.clear();
+  angle = 0;
+  int limit = adj.vf_start[p + 1] - adj.vf_start[p] + 1;
+  if (left) {
+    int h = adj.halfedge(mesh, a, p);
+    if (h < 0) return false;
+    for (int it = 0; it < limit; ++it) {
+      if (!face_in(h / 3)) return false;
+      out.push_back(h / 3);
+      int g = MeshAdjacency::next(h);  // p -> x
+      angle += angle3(mesh.vertices[p], mesh.vertices[vert(h)], mesh.vertices[vert_to(g)]);
+      if (vert_to(g) == b) return true;
+      h = adj.twin[g];
+      if (h < 0) return false;
+    }
+    return false;
+  } else {
+    int r = adj.halfedge(mesh, p, a);  // p -> a, face right of a->p
+    if (r < 0) return false;
+    for (int it = 0; it < limit; ++it) {
+      if (!face_in(r / 3)) return false;
+      out.push_back(r / 3);
+      int q = MeshAdjacency::prev(r);  // y -> p
+      angle += angle3(mesh.vertices[p], mesh.vertices[vert_to(r)], mesh.vertices[vert(q)]);
+      if (vert(q) == b) return true;
+      r = adj.twin[q];
+      if (r < 0) return false;
+    }
+    return false;
+  }
+}
+
+bool Shortener::strip_from_edge_loop(const std::vector<int>& P, std::vector<int>& S) const {
+  S.clear();
+  const size_t n = P.size();
+  std::vector<int> fl, fr;
+  for (size_t i = 0; i < n; ++i) {
+    int a = P[(i + n - 1) % n], p = P[i], b = P[(i + 1) % n];
+    double al = 0, ar = 0;
+    bool okl = fan(a, p, b, true, fl, al), okr = fan(a, p, b, false, fr, ar);
+    if (!okl && !okr) return false;
+    const auto& use = (okl && (!okr || al <= ar)) ? fl : fr;
+    for (int f : use)
+      if (S.empty() || S.back() != f) S.push_back(f);
+  }
+  while (S.size() > 1 && S.back() == S.front()) S.pop_back();
+  return S.size() >= 2 && portals_ok(S);
+}
+
+bool Shortener::portals_ok(const std::vector<int>& S) const {
+  for (size_t j = 0; j < S.size(); ++j)
+    if (portal_of(S[j], S[(j + 1) % S.size()]) < 0) return false;
+  return true;
+}
+
+int Shortener::portal_of(int f, int g) const {
+  for (int k = 0; k < 3; ++k) {
+    int h = 3 * g + k, t = adj.twin[h];
+    if (t >= 0 && t / 3 == f) return h;
+  }
+  return -1;
+}
+
+double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes) {
+  const int m = int(S.size());
+  portal_h.resize(m);
+  for (int j = 0; j < m; ++j) portal_h[j] = portal_of(S[j], S[(j + 1) % m]);
+  // Unfold: 2D coordinates of portal endpoints, in traversal order i = 0..m (portal c+i).
+  std::vector<P2> L2(m + 1), R2(m + 1);
+  std::vector<int> Lv(m + 1), Rv(m + 1);
+  {
+    int h = portal_h[c];
+    Lv[0] = vert(h), Rv[0] = vert_to(h);
+    L2[0] = {0, 0};
+    R2[0] = {dist3(mesh.vertices[Lv[0]], mesh.vertices[Rv[0]]), 0};
+  }
+  for (int i = 1; i <= m; ++i) {
+    int f = S[(c + i) % m];
+    int he = portal_h[(c + i - 1) % m];  // entry half-edge x->y inside f
+    int x = vert(he), y = vert_to(he), z = vert(MeshAdjacency::prev(he));
+    P2 X = L2[i - 1], Y = R2[i - 1];
+    double dxy = len2(X, Y), dxz = dist3(mesh.vertices[x], mesh.vertices[z]), dyz = dist3(mesh.vertices[y], mesh.vertices[z]);
+    double a = (dxz * dxz - dyz * dyz + dxy * dxy) / (2 * dxy);
+    double bb = std::sqrt(std::max(0.0, dxz * dxz - a * a));
+    P2 u{(Y.x - X.x) / dxy, (Y.y - X.y) / dxy}, perp{-u.y, u.x};
+    P2 Z{X.x + a * u.x + bb * perp.x, X.y + a * u.y + bb * perp.y};
+    int ho = portal_h[(c + i) % m];  // exit portal: its endpoints are vertices of f
+    int lx = vert(ho), ry = vert_to(ho);
+    auto pos = [&](int v) { return v == x ? X : v == y ? Y : Z; };
+    (void)f;
+    Lv[i] = lx, Rv[i] = ry;
+    L2[i] = pos(lx), R2[i] = pos(ry);
+  }
+  // Funnel portals: start point, portals 1..m-1, end point.
+  auto at = [](P2 a, P2 b, double t) { return P2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; };
+  P2 start = at(L2[0], R2[0], s[c]), end = at(L2[m], R2[m], s[c]);
+  std::vector<P2> pl(m + 1), pr(m + 1);
+  pl[0] = pr[0] = start;
+  pl[m] = pr[m] = end;
+  for (int i = 1; i < m; ++i) pl[i] = L2[i], pr[i] = R2[i];
+  std::vector<P2> pts{start};
+  std::vector<int> pidx{0};
+  std::vector<int> pside{-1};
+  // Each funnel point carries its portal index and side (0 left endpoint, 1 right, -1 start point); a
+  // reset funnel side inherits the apex's, so a re-added apex keeps its true position.
+  P2 apex = start, left = pl[0], right = pr[0];
+  int apexIndex = 0, leftIndex = 0, rightIndex = 0;
+  int apexSide = -1, leftSide = -1, rightSide = -1;
+  for (int i = 1; i <= m; ++i) {
+    P2 l = pl[i], r = pr[i];
+    int lside = i == m ? -1 : 0, rside = i == m ? -1 : 1;
+    if (triarea2(apex, right, r) <= 0.0) {
+      if (same(apex, right) || triarea2(apex, left, r) > 0.0) {
+        right = r, rightIndex = i, rightSide = rside;
+      } else {
+        pts.push_back(left), pidx.push_back(leftIndex), pside.push_back(leftSide);
+        apex = left, apexIndex = leftIndex, apexSide = leftSide;
+        left = right = apex, leftIndex = rightIndex = apexIndex, leftSide = rightSide = apexSide;
+        i = apexIndex;
+        continue;
+      }
+    }
+    if (triarea2(apex, left, l) >= 0.0) {
+      if (same(apex, left) || triarea2(apex, right, l) < 0.0) {
+        left = l, leftIndex = i, leftSide = lside;
+      } else {
+        pts.push_back(right), pidx.push_back(rightIndex), pside.push_back(rightSide);
+        apex = right, apexIndex = rightIndex, apexSide = rightSide;
+        left = right = apex, leftIndex = rightIndex = apexIndex, leftSide = rightSide = apexSide;
+        i = apexIndex;
+        continue;
+      }
+    }
+  }
+  pts.push_back(end), pidx.push_back(m), pside.push_back(-1);
+  double length = 0;
+  for (size_t k = 0; k + 1 < pts.size(); ++k) length += len2(pts[k], pts[k + 1]);
+  // Crossing parameters.
+  std::vector<double> ns(m);
+  ns[c] = s[c];
+  apexes.clear();
+  for (size_t k = 0; k + 1 < pts.size(); ++k) {
+    if (pside[k] >= 0) {
+      int i = pidx[k];
+      ns[(c + i) % m] = pside[k] == 0 ? 0.0 : 1.0;
+      apexes.push_back({(c + i) % m, pside[k] == 0 ? Lv[i] : Rv[i]});
+    }
+    P2 A = pts[k], B = pts[k + 1];
+    for (int i = pidx[k] + 1; i < pidx[k + 1]; ++i) {
+      P2 Lp = L2[i], Rp = R2[i];
+      P2 d{B.x - A.x, B.y - A.y}, e{Rp.x - Lp.x, Rp.y - Lp.y};
+      double den = e.x * d.y - e.y * d.x;
+      double t = std::fabs(den) < 1e-300 ? 0.5 : ((A.x - Lp.x) * d.y - (A.y - Lp.y) * d.x) / den;
+      ns[(c + i) % m] = std::min(1.0, std::max(0.0, t));
+    }
+  }
+  s = ns;
+  // The funnel assumes a sleeve that unfolds without overlapping itself; where the strip overlaps (tiny
+  // faces near clamped vertices, fans of more than 2*pi) its length can be optimistic, so report the
+  // length of the polyline actually built from the crossings.
+  (void)length;
+  return params_length(S, s);
+}
+
+P3 Shortener::crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const {
+  const int m = int(S.size());
+  int h = portal_of(S[j], S[(j + 1) % m]);
+  return lerp3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)], s[j]);
+}
+
+double Shortener::params_length(const std::vector<int>& S, const std::vector<double>& s) const {
+  const int m = int(S.size());
+  double L = 0;
+  P3 first = crossing(S, s, 0), prev = first;
+  for (int j = 1; j < m; ++j) {
+    P3 q = crossing(S, s, j);
+    L += dist3(prev, q);
+    prev = q;
+  }
+  return L + dist3(prev, first);
+}
+
+double Shortener::polish(const std::vector<int>& S, std::vector<double>& s, int sweeps) const {
+  const int m = int(S.size());
+  std::vector<int> ph(m);
+  for (int j = 0; j < m; ++j) ph[j] = portal_of(S[j], S[(j + 1) % m]);
+  auto point = [&](int j) { return lerp3(mesh.vertices[vert(ph[j])], mesh.vertices[vert_to(ph[j])], s[j]); };
+  double L = params_length(S, s);
+  for (int it = 0; it < sweeps; ++it) {
+    for (int j = 0; j < m; ++j) {
+      P3 P = point((j + m - 1) % m), Q = point((j + 1) % m);
+      const P3& A = mesh.vertices[vert(ph[j])];
+      const P3& B = mesh.vertices[vert_to(ph[j])];
+      double len = dist3(A, B);
+      if (len <= 0) continue;
+      P3 d{(B[0] - A[0]) / len, (B[1] - A[1]) / len, (B[2] - A[2]) / len};
+      auto split = [&](const P3& X, double& along, double& off) {
+        P3 v{X[0] - A[0], X[1] - A[1], X[2] - A[2]};
+        along = v[0] * d[0] + v[1] * d[1] + v[2] * d[2];
+        P3 o{v[0] - along * d[0], v[1] - along * d[1], v[2] - along * d[2]};
+        off = std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+      };
+      double ap, hp, aq, hq;
+      split(P, ap, hp);
+      split(Q, aq, hq);
+      double tau = hp + hq > 0 ? ap + (aq - ap) * hp / (hp + hq) : 0.5 * (ap + aq);
+      s[j] = std::min(1.0, std::max(0.0, tau / len));
+    }
+    double Ln = params_length(S, s);
+    bool done = Ln > L - 1e-12 * L;
+    L = std::min(L, Ln);
+    if (done) break;
+  }
+  return L;
+}
+
+Polyline3 Shortener::strip_points(const std::vector<int>& S, const std::vector<double>& s) const {
+  Polyline3 out;
+  const int m = int(S.size());
+  for (int j = 0; j < m; ++j) {
+    int h = portal_of(S[j], S[(j + 1) % m]);
+    P3 p = lerp3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)], s[j]);
+    if (out.empty() || dist3(out.back(), p) > 0) out.push_back(p);
+  }
+  while (out.size() > 1 && dist3(out.back(), out.front()) == 0) out.pop_back();
+  return out;
+}
+
+double Shortener::relax(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes) {
+  const int m = int(S.size());
+  double best = funnel(S, c, s, apexes);
+  int stalled = 0;
+  for (int it = 0; it < 100 && stalled < 2; ++it) {
+    c = (c + m / 2 + (it % 2)) % m;  // a portal far from the last cut
+    double L = funnel(S, c, s, apexes);
+    stalled = L < best - 1e-8 * best ? 0 : stalled + 1;
+    best = std::min(best, L);
+  }
+  return best;
+}
+
+std::vector<int> Shortener::other_fan(int v, int fa, int fb, int fa_next) const {
+  // Start from the edge of fa at v that is NOT shared with fa_next.
+  int hstart = -1;
+  for (int k = 0; k < 3; ++k) {
+    int h = 3 * fa + k;
+    bool at_v = vert(h) == v || vert_to(h) == v;
+    if (!at_v) continue;
+    int t = adj.twin[h];
+    if (t >= 0 && t / 3 == fa_next) continue;
+    hstart = h;
+  }
+  if (hstart < 0) return {};
+  std::vector<int> run{fa};
+  int h = hstart;
+  int limit = adj.vf_start[v + 1] - adj.vf_start[v] + 1;
+  for (int it = 0; it < limit; ++it) {
+    int t = adj.twin[h];
+    if (t < 0) return {};
+    int g = t / 3;
+    if (!face_in(g)) return {};
+    run.push_back(g);
+    if (g == fb) return run;
+    // the other edge of g at v
+    int nh = -1;
+    for (int k = 0; k < 3; ++k) {
+      int e = 3 * g + k;
+      if (e == t) continue;
+      if (vert(e) == v || vert_to(e) == v) nh = e;
+    }
+    if (nh < 0) return {};
+    h = nh;
+  }
+  return {};
+}
+
+double Shortener::total_angle(int v) const {
+  double a = 0;
+  for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i) {
+    auto& t = mesh.faces[adj.vf[i]];
+    int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+    a += angle3(mesh.vertices[v], mesh.vertices[t[(k + 1) % 3]], mesh.vertices[t[(k + 2) % 3]]);
+  }
+  return a;
+}
+
+bool Shortener::interior_vertex(int v) const {
+  for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (adj.twin[3 * adj.vf[i] + k] < 0) return false;
+  return true;
+}
+
+int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit) {
+  const int m = int(S.size());
+  struct Cand { double other; int a, len; std::vector<int> run; };
+  std::vector<Cand> cands;
+  for (auto& ap : apexes) {
+    int v = ap.vertex;
+    if (!interior_vertex(v)) continue;
+    // Run of strip faces containing v around portal ap.portal (between S[p] and S[p+1]).
+    int a = ap.portal, b = (ap.portal + 1) % m, len = 2;
+    while (len < m && contains(S[(a + m - 1) % m], v)) a = (a + m - 1) % m, ++len;
+    while (len < m && contains(S[(b + 1) % m], v)) b = (b + 1) % m, ++len;
+    if (len >= m - 2) continue;
+    int fa = S[a], fb = S[b];
+    // Entry crossing (portal a-1, opposite v in fa) and exit crossing (portal b).
+    int hin = portal_of(S[(a + m - 1) % m], fa), hout = portal_of(fb, S[(b + 1) % m]);
+    if (hin < 0 || hout < 0) continue;
+    P3 qin = lerp3(mesh.vertices[vert(hin)], mesh.vertices[vert_to(hin)], s[(a + m - 1) % m]);
+    P3 qout = lerp3(mesh.vertices[vert(hout)], mesh.vertices[vert_to(hout)], s[b]);
+    double run_angle = 0;
+    for (int i = 0, j = a; i < len; ++i, j = (j + 1) % m) {
+      auto& t = mesh.faces[S[j]];
+      int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      run_angle += angle3(mesh.vertices[v], mesh.vertices[t[(k + 1) % 3]], mesh.vertices[t[(k + 2) % 3]]);
+    }
+    auto outer_vertex = [&](int f, int neighbour) {  // vertex u of f with edge (v,u) not shared with neighbour
+      auto& t = mesh.faces[f];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] != v && !contains(neighbour, t[k])) return t[k];
+      return -1;
+    };
+    int ua = outer_vertex(fa, S[(a + 1) % m]), ub = outer_vertex(fb, S[(b + m - 1) % m]);
+    if (ua < 0 || ub < 0) continue;
+    double theta = run_angle - angle3(mesh.vertices[v], qin, mesh.vertices[ua]) - angle3(mesh.vertices[v], qout, mesh.vertices[ub]);
+    double other = total_angle(v) - theta;
+    if (!(other < M_PI - 1e-9)) continue;
+    auto run = other_fan(v, fa, fb, S[(a + 1) % m]);
+    if (run.size() < 2) continue;
+    cands.push_back({other, a, len, run});
+  }
+  std::stable_sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.other < y.other; });
+  std::vector<char> used(m, 0);
+  std::vector<int> start_of(m, -1);
+  int chosen = 0, first_end = -1;
+  for (size_t ci = 0; ci < cands.size(); ++ci) {
+    auto& c = cands[ci];
+    if (chosen >= limit) break;
+    bool free = true;
+    for (int i = -1; i <= c.len && free; ++i) free = !used[(c.a + i + m) % m];
+    if (!free) continue;
+    for (int i = -1; i <= c.len; ++i) used[(c.a + i + m) % m] = 1;
+    start_of[c.a] = int(ci);
+    if (first_end < 0) first_end = (c.a + c.len) % m;
+    ++chosen;
+  }
+  if (!chosen) return 0;
+  std::vector<int> NS;
+  std::vector<double> Ns;
+  for (int i = 0; i < m;) {
+    int j = (first_end + i) % m;
+    if (start_of[j] >= 0) {
+      auto& c = cands[start_of[j]];
+      for (size_t k = 0; k < c.run.size(); ++k) NS.push_back(c.run[k]), Ns.push_back(0.5);
+      Ns.back() = s[(c.a + c.len - 1) % m];  // portal after fb is the old portal b
+      i += c.len;
+    } else {
+      NS.push_back(S[j]), Ns.push_back(s[j]);
+      ++i;
+    }
+  }
+  if (!portals_ok(NS)) return 0;
+  S.swap(NS);
+  s.swap(Ns);
+  cut = 0;  // old portal first_end, crossing known
+  return chosen;
+}
+
+}  // namespace chokeloops::shorten_detail

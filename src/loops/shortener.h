@@ -1,0 +1,115 @@
+#pragma once
+// Internals of shorten_loop shared by its three files: the annulus band around the loop, the Shortener that
+// holds it (steps 1-2 in shorten_band.cpp, step 3 in shorten_strip.cpp) and the small 3D helpers they use.
+#include <array>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+
+namespace chokeloops::shorten_detail {
+
+using P3 = std::array<double, 3>;
+
+inline double dist3(const P3& a, const P3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+inline P3 lerp3(const P3& a, const P3& b, double s) { return {a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])}; }
+inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v between v->a and v->b
+  P3 u{a[0] - v[0], a[1] - v[1], a[2] - v[2]}, w{b[0] - v[0], b[1] - v[1], b[2] - v[2]};
+  P3 c{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  double cn = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  return std::atan2(cn, u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
+}
+
+// Everything about the annulus band around the loop.
+struct Band {
+  std::unordered_set<int> in_face;  // mesh faces of the band
+  std::vector<int> faces;
+  std::unordered_map<int, int> local;  // mesh vertex -> band vertex
+  std::vector<int> global;          // band vertex -> mesh vertex
+  std::unordered_map<int, int> sign;  // cut crossing sign per mesh half-edge
+  int winding = 0;                  // of the input loop
+  std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
+};
+
+struct Shortener {
+  const SurfaceMesh& mesh;
+  const MeshAdjacency& adj;
+  Band band;
+
+  Shortener(const SurfaceMesh& m, const MeshAdjacency& a) : mesh(m), adj(a) {}
+
+  int vert(int h) const { return mesh.faces[h / 3][h % 3]; }          // source of half-edge h
+  int vert_to(int h) const { return mesh.faces[h / 3][(h % 3 + 1) % 3]; }
+  bool face_in(int f) const { return f >= 0 && band.in_face.count(f); }
+  int local_of(int v) const {
+    auto it = band.local.find(v);
+    return it == band.local.end() ? -1 : it->second;
+  }
+  int hsign(int h) const {
+    auto it = band.sign.find(h);
+    return it == band.sign.end() ? 0 : it->second;
+  }
+  // Half-edge a->b in any face, or -1 - (half-edge b->a) when only the reverse exists.
+  int signed_edge_sign(int a, int b) const {
+    int h = adj.halfedge(mesh, a, b);
+    if (h >= 0) return hsign(h);
+    int r = adj.halfedge(mesh, b, a);
+    return r >= 0 ? -hsign(r) : 0;
+  }
+  bool contains(int f, int v) const { auto& t = mesh.faces[f]; return t[0] == v || t[1] == v || t[2] == v; }
+
+  // ---- Step 1: band (shorten_band.cpp) -----------------------------------------------------------
+  // Builds the band of faces allowed by `allowed_vertex` and checks that it is an annulus; sets the cut.
+  // `region`: mesh vertices near the loop; `allowed[i]` and `near_loop[i]` (2: on the loop, 1: one ring
+  // away) refer to region[i]; `rid` maps mesh vertices to region indices.
+  bool build_band(const std::vector<int>& region, const std::unordered_map<int, int>& rid,
+                  const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop);
+
+  // ---- Step 2: shortest edge loop in the band (shorten_band.cpp) ---------------------------------
+  struct Arc { int to; double len; int sign; };
+  std::vector<int> arc_start;
+  std::vector<Arc> arcs;
+  void build_arcs();
+  // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices.
+  std::vector<int> shortest_loop_through(int s, double& length) const;
+
+  // ---- Step 3: strip and funnel (shorten_strip.cpp) ----------------------------------------------
+  // Fan of faces around path vertex p (from in-edge a->p to out-edge p->b), on the left or the right.
+  bool fan(int a, int p, int b, bool left, std::vector<int>& out, double& angle) const;
+  bool strip_from_edge_loop(const std::vector<int>& P, std::vector<int>& S) const;
+  // Portal j: half-edge (in S[j+1]) whose twin lies in S[j]; left = its source, right = its target.
+  std::vector<int> portal_h;
+  bool portals_ok(const std::vector<int>& S) const;
+  int portal_of(int f, int g) const;
+
+  // Funnel through the strip cut at portal c with the loop crossing it at parameter s_c. Fills s (per
+  // portal) and the apex list (portal index, mesh vertex). Returns the length.
+  struct Apex { int portal; int vertex; };
+  double funnel(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
+
+  P3 crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const;
+  double params_length(const std::vector<int>& S, const std::vector<double>& s) const;
+  // Gauss-Seidel on the crossing parameters: each crossing moves to the point of its portal that is
+  // closest to its neighbours (unfolding the two faces around the portal). The length is a convex
+  // function of the parameters, so this only polishes what the funnel left.
+  double polish(const std::vector<int>& S, std::vector<double>& s, int sweeps) const;
+  Polyline3 strip_points(const std::vector<int>& S, const std::vector<double>& s) const;
+  // Alternate the cut portal until the length stops decreasing.
+  double relax(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
+
+  // Faces around v from f_a the other way round to f_b (f_a and f_b included), or empty.
+  std::vector<int> other_fan(int v, int fa, int fb, int fa_next) const;
+  double total_angle(int v) const;
+  bool interior_vertex(int v) const;
+
+  // Side swaps at every apex whose angle on the far side is below pi, for non-overlapping runs at once
+  // (smallest far-side angle first). Returns the number of swaps made.
+  int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit);
+};
+
+}  // namespace chokeloops::shorten_detail
