@@ -4,7 +4,7 @@
 // Conventions: a grid array is indexed a[i, j, k] = value at origin + voxel_size * (i, j, k), i.e. shape
 // (nx, ny, nz). The engine stores x fastest, which is numpy's Fortran order: arrays handed out are
 // Fortran-ordered views of the engine's own storage (no copy); arrays taken in are copied once into it
-// (directly when Fortran-contiguous float32). Results hand out views of the result object's vectors.
+// (directly when Fortran-contiguous float32). Results hand out read-only views of the result object's vectors.
 // Every computation runs with the GIL released. chokeloops::Error becomes chokeloops.InputError
 // (a ValueError, exit code 2) or chokeloops.ResourceError (a MemoryError, exit code 3) with the CLI's message.
 #include <pybind11/numpy.h>
@@ -153,7 +153,9 @@ py::array view(const T* data, std::vector<py::ssize_t> shape, py::handle owner) 
     strides[d] = s;
     s *= shape[d];
   }
-  return py::array(py::dtype::of<T>(), shape, strides, data, owner);
+  py::array a(py::dtype::of<T>(), shape, strides, data, owner);
+  a.attr("flags").attr("writeable") = false;  // the result's own data: to_json() and write() read it
+  return a;
 }
 
 // Moves a vector into a capsule and returns an array over it (no copy).
@@ -166,7 +168,11 @@ py::array adopt(std::vector<T>&& v, std::vector<py::ssize_t> shape, std::vector<
 
 py::array grid_array(ScalarGrid& grid, py::handle owner) {
   const py::ssize_t f = sizeof(float), nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
-  if (owner) return py::array(py::dtype::of<float>(), {nx, ny, nz}, {f, f * nx, f * nx * ny}, grid.values.data(), owner);
+  if (owner) {
+    py::array a(py::dtype::of<float>(), {nx, ny, nz}, {f, f * nx, f * nx * ny}, grid.values.data(), owner);
+    a.attr("flags").attr("writeable") = false;
+    return a;
+  }
   return adopt(std::move(grid.values), {nx, ny, nz}, {f, f * nx, f * nx * ny});
 }
 

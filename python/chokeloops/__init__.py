@@ -121,7 +121,9 @@ def batch(paths, outdir, client=None, jobs=1, resume=True, view=True, **options)
         else:
             todo.append(i)
 
-    if client is not None:
+    if not todo:
+        pass
+    elif client is not None:
         futures = client.map(_run_item, [paths[i] for i in todo], [dirs[i] for i in todo],
                              resume=resume, view=view, options=options, pure=False)
         for i, fut in zip(todo, futures):

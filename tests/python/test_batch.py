@@ -49,7 +49,7 @@ def test_batch_on_a_two_worker_local_cluster(inputs, tmp_path):
     outdir = tmp_path / "out"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None, worker_dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+            distributed.Client(cluster.scheduler_address) as client:  # by address, as a remote scheduler
         assert len(client.scheduler_info()["workers"]) == 2
         rows = chokeloops.batch(inputs, outdir, client=client, view=False, **OPTIONS)
         check_rows(rows, inputs, outdir)
@@ -101,6 +101,17 @@ def test_cli_batch(inputs, tmp_path, cli):
     assert [r["resumed"] for r in rows] == [True, True, True, False]
     p = subprocess.run(args, capture_output=True, text=True)
     assert "3 ok (3 done earlier), 1 failed" in p.stdout
-    # bad arguments: exit code 2, one line
-    p = subprocess.run([cli, "batch", "-o", str(outdir)], capture_output=True, text=True)
-    assert p.returncode == 2 and "no input given" in p.stderr
+    # bad arguments: exit code 2, one line naming the mistake
+    for bad, says in ((["-o", str(outdir)], "no input given"),
+                      ([inputs[0]], "no output directory given"),
+                      ([inputs[0], "-o", str(outdir), "--jobs", "0"], "--jobs expects an integer in [1, 1024], got '0'"),
+                      ([inputs[0], "-o", str(outdir), "--bogus"], "unknown option --bogus"),
+                      ([inputs[0], "-o", str(outdir), "--list", str(tmp_path / "nolist.txt")], "cannot read input list")):
+        p = subprocess.run([cli, "batch", *bad], capture_output=True, text=True)
+        assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and says in p.stderr, p.stderr
+    # --list: inputs from a file
+    listing = tmp_path / "inputs.txt"
+    listing.write_text("# meshes\n" + "\n".join(inputs[:2]) + "\n")
+    p = subprocess.run([cli, "batch", "--list", str(listing), "-o", str(outdir), "--resolution", "48", "--no-view"],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and "2 input(s): 2 ok (2 done earlier), 0 failed" in p.stdout
