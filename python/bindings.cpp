@@ -6,7 +6,8 @@
 // Fortran-ordered views of the engine's own storage (no copy); arrays taken in are copied once into it
 // (directly when Fortran-contiguous float32). Results hand out read-only views of the result object's vectors.
 // Every computation runs with the GIL released. chokeloops::Error becomes chokeloops.InputError
-// (a ValueError, exit code 2) or chokeloops.ResourceError (a MemoryError, exit code 3) with the CLI's message.
+// (a ValueError, exit code 2) or chokeloops.ResourceError (a MemoryError, exit code 3) with the CLI's message;
+// chokeloops::InternalError (a bug) becomes chokeloops.InternalError (a RuntimeError, exit code 4).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -32,6 +33,7 @@ namespace {
 PyObject* g_error = nullptr;           // chokeloops.Error(Exception)
 PyObject* g_input_error = nullptr;     // chokeloops.InputError(Error, ValueError)
 PyObject* g_resource_error = nullptr;  // chokeloops.ResourceError(Error, MemoryError)
+PyObject* g_internal_error = nullptr;  // chokeloops.InternalError(Error, RuntimeError): a bug, CLI exit code 4
 
 [[noreturn]] void input_error(const std::string& msg) { throw Error(msg, 2); }
 
@@ -426,7 +428,12 @@ PYBIND11_MODULE(_chokeloops, m) {
   g_resource_error = PyErr_NewExceptionWithDoc("chokeloops.ResourceError",
                                                "Out of memory or another resource (CLI exit code 3); the message names a resolution that fits.",
                                                resource_bases.ptr(), nullptr);
+  py::tuple internal_bases = py::make_tuple(py::handle(g_error), py::handle(PyExc_RuntimeError));
+  g_internal_error = PyErr_NewExceptionWithDoc("chokeloops.InternalError",
+                                               "A failed internal self-check: a bug in chokeloops, not a problem with the input (CLI exit code 4).",
+                                               internal_bases.ptr(), nullptr);
   m.attr("Error") = py::handle(g_error);
+  m.attr("InternalError") = py::handle(g_internal_error);
   m.attr("InputError") = py::handle(g_input_error);
   m.attr("ResourceError") = py::handle(g_resource_error);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -434,6 +441,10 @@ PYBIND11_MODULE(_chokeloops, m) {
       if (p) std::rethrow_exception(p);
     } catch (const Error& e) {
       PyErr_SetString(e.exit_code == 3 ? g_resource_error : e.exit_code == 2 ? g_input_error : g_error, e.what());
+    } catch (const InternalError& e) {
+      PyErr_SetString(g_internal_error,
+                      (std::string("internal error (a bug in chokeloops, not a problem with the input): ") + e.what() +
+                       "; please report it with the input and the call").c_str());
     } catch (const std::bad_alloc&) {
       PyErr_SetString(g_resource_error, "out of memory; use a coarser resolution");
     }

@@ -34,7 +34,7 @@ struct BatchItem {
   std::string most_persistent_side;
   double most_persistent = 0;          // its persistence
   double seconds = 0;                  // wall time of the analysis and the report
-  int exit_code = 0;                   // 0 ok, 2 bad input, 3 out of resources, 4 crashed
+  int exit_code = 0;                   // the CLI's: 0 ok, 2 bad input, 3 out of resources, 4 internal error or crash
   std::string error;                   // the message the CLI would print ("" when ok)
   std::string options;                 // options_key() of the run
 };

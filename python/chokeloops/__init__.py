@@ -21,7 +21,8 @@ Options are the CLI's, as keywords: resolution (int or "auto"), voxel_size, marg
 (a percentage string like "50%" or a length), side ("handle"/"tunnel"/"both"), max_memory (bytes or "8G"),
 threads, shorten, slide, check, fill_holes, iso, grid. Errors raise InputError (a ValueError: bad input,
 CLI exit code 2) or ResourceError (a MemoryError: out of resources, exit code 3) with the CLI's message;
-both derive from chokeloops.Error. The engine runs with the GIL released.
+InternalError (a RuntimeError, exit code 4) is a bug in chokeloops; all derive from chokeloops.Error.
+The engine runs with the GIL released.
 """
 import csv
 import os
@@ -29,11 +30,11 @@ import os
 import numpy as np
 
 from . import _chokeloops as _c
-from ._chokeloops import Error, InputError, ResourceError, Result
+from ._chokeloops import Error, InputError, InternalError, ResourceError, Result
 
 __version__ = _c.__version__
 __all__ = ["analyze", "levelset", "persistence", "batch", "read_summary", "Grid", "Result",
-           "Error", "InputError", "ResourceError"]
+           "Error", "InputError", "ResourceError", "InternalError"]
 
 
 class Grid(np.ndarray):

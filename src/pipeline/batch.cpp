@@ -217,6 +217,10 @@ BatchItem analyze_item(const std::string& input, const std::string& item_dir, co
     item.status = "failed";
     item.exit_code = e.exit_code;
     item.error = e.what();
+  } catch (const InternalError& e) {
+    item.status = "failed";
+    item.exit_code = kInternalErrorExitCode;
+    item.error = std::string("internal error (a bug in chokeloops, not a problem with the input): ") + e.what();
   } catch (const std::bad_alloc&) {
     item.status = "failed";
     item.exit_code = 3;
@@ -295,18 +299,20 @@ std::vector<BatchItem> run_batch(const std::vector<std::string>& inputs, const s
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started[pid]).count();
     started.erase(pid);
     BatchItem it;
-    if (read_status(dirs[i], it) && it.options == key) {
-      items[i] = it;
-    } else {
+    const bool reported = read_status(dirs[i], it) && it.options == key;
+    if (!reported) {  // the child died before writing its status: a crash (a bug) or a kill (memory?)
       it = BatchItem{};
       it.status = "failed";
-      it.exit_code = 4;
+      it.exit_code = kInternalErrorExitCode;
       it.seconds = seconds;
       it.options = key;
       if (WIFSIGNALED(wstatus)) {
         const int sig = WTERMSIG(wstatus);
-        it.error = "the analysis crashed (signal " + std::to_string(sig) + ", " + strsignal(sig) + ")" +
-                   (sig == SIGKILL ? "; killed, perhaps out of memory: try a coarser --resolution or fewer --jobs" : "");
+        it.error = "the analysis crashed (signal " + std::to_string(sig) + ", " + strsignal(sig) + ")";
+        if (sig == SIGKILL) {
+          it.exit_code = 3;
+          it.error += "; killed, perhaps out of memory: try a coarser --resolution or fewer --jobs";
+        }
       } else {
         it.error = "the analysis ended (exit code " + std::to_string(WEXITSTATUS(wstatus)) + ") without a status";
       }
@@ -314,7 +320,7 @@ std::vector<BatchItem> run_batch(const std::vector<std::string>& inputs, const s
     it.input = inputs[i];
     it.outdir = dirs[i];
     items[i] = it;
-    if (it.exit_code == 4) write_status(items[i]);
+    if (!reported) write_status(items[i]);
     finish(i);
   }
   write_batch_summary(items, (fs::path(outdir) / "summary.csv").string());

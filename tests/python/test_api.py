@@ -136,6 +136,15 @@ def test_errors_are_python_exceptions_with_the_cli_messages(cli, tmp_path):
     assert str(e.value) == cli_error(cli, "analyze", kitten, "--dmax", "lots", "-o", str(tmp_path / "o"))[1]
 
 
+def test_exception_classes():
+    E = chokeloops
+    assert issubclass(E.InputError, ValueError) and issubclass(E.ResourceError, MemoryError)
+    assert issubclass(E.InternalError, RuntimeError)
+    for cls in (E.InputError, E.ResourceError, E.InternalError):
+        assert issubclass(cls, E.Error)
+    assert not issubclass(E.InputError, MemoryError) and not issubclass(E.ResourceError, ValueError)
+
+
 def test_bad_arrays_and_arguments():
     sdf, h, origin = torus_sdf(24)
     bad = sdf.copy()
