@@ -104,7 +104,9 @@ def batch(paths, outdir, client=None, jobs=1, resume=True, view=True, **options)
     visible to them under the same names, e.g. a shared file system). Without one, the inputs run here,
     one after the other (jobs=1) or in `jobs` separate processes.
     resume: inputs that finished earlier with the same options are skipped (their rows have resumed=True).
-    A failing input never stops the others: its row has status "failed" and the error message.
+    A failing input never stops the others: its row has status "failed" and the error message. (An input
+    that crashes its process is its own failure on Dask, which replaces the worker; with jobs > 1 it breaks
+    the local pool and the inputs still queued fail too: run again, resume redoes only those.)
     options: as for analyze() (threads=N sets the engine's threads per input).
     """
     paths = [os.path.abspath(os.fspath(p)) for p in paths]
