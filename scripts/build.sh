@@ -6,4 +6,4 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > build.log 2>&1 || { cat build.log; exit 1; }
 cmake --build build -j"$(nproc)" >> build.log 2>&1 || { tail -50 build.log; exit 1; }
-echo "build: ok (build/chokeloops)"
+echo "build: ok (build/chokeloops; Python: PYTHONPATH=$PWD/build/python /usr/bin/python3 -c 'import chokeloops', or bash scripts/install-python.sh)"

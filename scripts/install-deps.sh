@@ -10,6 +10,7 @@ PKGS=(
   libeigen3-dev libtet1.5-dev
   libgtest-dev googletest libphat-dev
   nlohmann-json3-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed
   chromium
 )
 if [ "${1:-}" = fuzz ]; then PKGS+=(clang libfuzzer-14-dev); fi

@@ -46,4 +46,7 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
 // Writes surface.ply, loops.ply, loops.obj and loops.json (DESIGN §5) into outdir (created if missing).
 void write_report(const AnalyzeResult& result, const AnalyzeOptions& options, const std::string& outdir);
 
+// The text of loops.json (what write_report writes there), for callers that keep results in memory.
+std::string report_json(const AnalyzeResult& result, const AnalyzeOptions& options);
+
 }  // namespace chokeloops

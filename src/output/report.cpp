@@ -12,18 +12,7 @@ namespace {
 nlohmann::json point(const std::array<double, 3>& p) { return nlohmann::json::array({p[0], p[1], p[2]}); }
 }  // namespace
 
-void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const std::string& outdir) {
-  std::error_code ec;
-  std::filesystem::create_directories(outdir, ec);
-  if (ec || !std::filesystem::is_directory(outdir))
-    throw Error("cannot create output directory '" + outdir + "': " + ec.message());
-  write_ply(r.surface, outdir + "/surface.ply");
-  std::vector<Polyline3> polylines;
-  for (const Loop& l : r.loops)
-    if (l.found) polylines.push_back(l.points);
-  write_loops_ply(polylines, outdir + "/loops.ply");
-  write_loops_obj(polylines, outdir + "/loops.obj");
-
+std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
   using nlohmann::json;
   json j;
   j["input"] = std::filesystem::path(r.input).filename().string();
@@ -93,8 +82,22 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
   json timings = json::object();
   for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;
   j["timings_ms"] = timings;
+  return j.dump(1) + "\n";
+}
+
+void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const std::string& outdir) {
+  std::error_code ec;
+  std::filesystem::create_directories(outdir, ec);
+  if (ec || !std::filesystem::is_directory(outdir))
+    throw Error("cannot create output directory '" + outdir + "': " + ec.message());
+  write_ply(r.surface, outdir + "/surface.ply");
+  std::vector<Polyline3> polylines;
+  for (const Loop& l : r.loops)
+    if (l.found) polylines.push_back(l.points);
+  write_loops_ply(polylines, outdir + "/loops.ply");
+  write_loops_obj(polylines, outdir + "/loops.obj");
   std::ofstream out(outdir + "/loops.json");
-  out << j.dump(1) << "\n";
+  out << report_json(r, options);
   if (!out) throw Error("cannot write '" + outdir + "/loops.json' (disk full?)");
 }
 
