@@ -28,6 +28,29 @@ using Point = K::Point_3;
 using SMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
+// Whether some connected component's vertices all lie in one plane (exact predicates).
+bool has_flat_component(SMesh& m) {
+  auto component = m.add_property_map<SMesh::Face_index, std::size_t>("f:chokeloops_component", 0).first;
+  const std::size_t n = PMP::connected_components(m, component);
+  std::vector<std::vector<Point>> points(n);
+  for (auto f : m.faces())
+    for (auto v : CGAL::vertices_around_face(m.halfedge(f), m)) points[component[f]].push_back(m.point(v));
+  m.remove_property_map(component);
+  for (auto& pts : points) {
+    if (pts.size() < 4) return true;
+    std::size_t b = 1, c = 0;
+    while (b < pts.size() && pts[b] == pts[0]) ++b;
+    for (std::size_t i = b + 1; i < pts.size() && !c; ++i)
+      if (!CGAL::collinear(pts[0], pts[b], pts[i])) c = i;
+    if (b >= pts.size() || !c) return true;
+    bool flat = true;
+    for (std::size_t i = 1; i < pts.size() && flat; ++i)
+      flat = CGAL::orientation(pts[0], pts[b], pts[c], pts[i]) == CGAL::COPLANAR;
+    if (flat) return true;
+  }
+  return false;
+}
+
 std::uint64_t edge_key(std::size_t a, std::size_t b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(a) << 32) | std::uint64_t(b);
@@ -293,8 +316,10 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
     out.warnings.push_back(s.str());
   }
 
-  // 6. outward orientation of closed meshes (nested components alternate)
-  if (r.boundary_edges_remaining == 0) {
+  // 6. outward orientation of closed meshes (nested components alternate). CGAL's orientation looks at
+  // the extreme vertex of each component and is undefined (an assertion, then a crash) on a component that
+  // encloses no volume: all its points coplanar. Such a mesh is left as it is (found by fuzzing).
+  if (r.boundary_edges_remaining == 0 && !has_flat_component(sm)) {
     try {
       PMP::orient_to_bound_a_volume(sm);
     } catch (const std::exception&) {

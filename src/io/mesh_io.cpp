@@ -69,6 +69,45 @@ std::size_t ply_type_size(const std::string& t) {
   return 0;
 }
 
+// A header line as it may be shown in a one-line message: control bytes as '?', at most 60 characters.
+std::string printable(std::string s) {
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return s;
+}
+
+// CGAL's OFF reader reads the counts as floating point and converts them to int (undefined beyond INT_MAX,
+// found by fuzzing): the counts must be non-negative integers that a file of this size can hold.
+void check_off_header(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::string> tokens;
+  std::string line;
+  while (tokens.size() < 4 && std::getline(in, line)) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    if (tokens.empty() && line.find("BINARY") != std::string::npos) return;  // binary OFF: CGAL checks it
+    std::istringstream ls(line);
+    for (std::string t; tokens.size() < 4 && ls >> t;) tokens.push_back(t);
+  }
+  if (tokens.empty() || tokens[0].size() < 3 || tokens[0].compare(tokens[0].size() - 3, 3, "OFF") != 0) return;
+  if (tokens[0] == "4OFF" || tokens[0] == "nOFF") return;  // other dimensions: CGAL refuses them itself
+  std::uintmax_t counts[2] = {0, 0};
+  for (std::size_t i = 1; i < 3; ++i) {
+    const std::string& t = i < tokens.size() ? tokens[i] : std::string();
+    if (t.empty() || t.size() > 10 || t.find_first_not_of("0123456789") != std::string::npos)
+      throw Error(q(path) + ": malformed OFF header: the " + (i == 1 ? "vertex" : "face") + " count '" +
+                  printable(t) + "' is not a non-negative integer");
+    counts[i - 1] = std::stoull(t);
+  }
+  if (counts[0] > size / 2 || counts[1] > size / 2) {
+    std::ostringstream s;
+    s << q(path) << ": OFF header announces " << counts[0] << " vertices and " << counts[1]
+      << " faces, more than a file of " << size << " bytes holds (truncated or malformed)";
+    throw Error(s.str());
+  }
+}
+
 PlyHeader read_ply_header(const std::string& path) {
   PlyHeader h;
   std::ifstream in(path, std::ios::binary);
@@ -90,6 +129,12 @@ PlyHeader read_ply_header(const std::string& path) {
     std::istringstream ls(line);
     std::string kw;
     ls >> kw;
+    // CGAL's PLY reader trusts the header's grammar (a property before any element crashes it): check it here.
+    if (kw.empty() || kw == "comment" || kw == "obj_info") continue;
+    if (kw != "format" && kw != "element" && kw != "property" && kw != "end_header")
+      throw Error(q(path) + ": malformed PLY header line '" + printable(line) + "'");
+    if (kw == "property" && current.empty())
+      throw Error(q(path) + ": PLY header has a property before any element");
     if (kw == "format") ls >> h.format;
     else if (kw == "element") {
       close_element();
@@ -105,9 +150,12 @@ PlyHeader read_ply_header(const std::string& path) {
       if (t == "list") {
         std::string ct, it;
         ls >> ct >> it;
+        if (!ply_type_size(ct) || !ply_type_size(it))
+          throw Error(q(path) + ": PLY header line '" + printable(line) + "' names an unknown type");
         // the list count itself, plus at least 3 indices for a face
         lists_min += ply_type_size(ct) + (current == "face" ? 3 * ply_type_size(it) : 0);
       } else {
+        if (!ply_type_size(t)) throw Error(q(path) + ": PLY header line '" + printable(line) + "' names an unknown type");
         fixed += ply_type_size(t);
       }
     } else if (kw == "end_header") {
@@ -283,6 +331,8 @@ TriangleMesh read_mesh(const std::string& path) {
         << ")";
       throw Error(s.str());
     }
+  } else if (ext == ".off") {
+    check_off_header(path, size);
   } else if (ext == ".stl") {
     binary = stl_is_binary(path, size, &stl_count);
     if (binary) {
