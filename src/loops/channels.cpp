@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <tbb/parallel_for.h>
 
+#include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
 
 namespace chokeloops {
@@ -74,8 +75,9 @@ bool surrounded(const V3& x, const V3 c[3]) {
   V3 nrm = (c[1] - c[0]).cross(c[2] - c[0]);
   auto side = [&](const V3& a, const V3& b) { return (b - a).cross(-a).dot(nrm); };
   const double s0 = side(u[0], u[1]), s1 = side(u[1], u[2]), s2 = side(u[2], u[0]);
+  // on the boundary counts: symmetric rings (a square of atoms) put the centre on an edge of every triple
   const double eps = 1e-9;
-  return (s0 > eps && s1 > eps && s2 > eps) || (s0 < -eps && s1 < -eps && s2 < -eps);
+  return (s0 > -eps && s1 > -eps && s2 > -eps) || (s0 < eps && s1 < eps && s2 < eps);
 }
 
 void describe(Loop& loop) {
@@ -215,6 +217,35 @@ std::vector<LiningAtom> sorted_lining(const std::map<int, double>& m) {
 
 }  // namespace
 
+Loop section_loop(const Choke& choke, const Polyline3& section, const SurfaceMesh& surface, const MeshAdjacency& adjacency) {
+  Loop loop;
+  loop.choke = choke;
+  loop.points = section;
+  loop.found = true;
+  loop.raw_length = closed_length(section);
+  loop.note = "the surface's cross-section at the exact bottleneck";
+  // A planar section of a bumpy lumen dips into every groove between atoms; shortening within a band of a
+  // few edge rings (and 1 Å) pulls it over the atoms while it stays in the pore.
+  try {
+    ShortenOptions so;
+    so.max_move = 1.0;
+    ShortenResult s = shorten_polyline(surface, adjacency, section, so);
+    loop.edge_path = s.edge_path;
+    if (s.rings > 0 && !s.points.empty() && s.length < loop.raw_length) {
+      loop.points = s.points;
+      loop.note += ", shortened";
+    }
+  } catch (const std::exception&) {
+    try {
+      loop.edge_path = snap_polyline_to_edge_path(surface, adjacency, section);
+    } catch (const std::exception&) {
+      loop.edge_path.clear();
+    }
+  }
+  describe(loop);
+  return loop;
+}
+
 bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& x0, double search_radius, Channel& out) {
   const double f0 = locator.distance(x0);
   std::vector<int> near = locator.within(x0, std::max(0.0, f0) + search_radius + 0.5);
@@ -256,8 +287,9 @@ bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& 
   return found;
 }
 
-Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& pa, const std::array<double, 3>& na,
-                             double max_radius) {
+namespace {
+Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, const std::array<double, 3>& pa,
+                     const std::array<double, 3>& na, double max_radius) {
   const V3 p = v3(pa), n = v3(na).normalized();
   V3 e1 = std::abs(n[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
   e1 = (e1 - e1.dot(n) * n).normalized();
@@ -280,7 +312,8 @@ Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double
     point_id[key] = int(pts.size()) - 1;
     return int(pts.size()) - 1;
   };
-  for (auto& f : surface.faces) {
+  for (int fi : faces) {
+    const auto& f = surface.faces[std::size_t(fi)];
     const V3 a = v3(surface.vertices[std::size_t(f[0])]);
     if ((a - p).norm() > max_radius) continue;
     int crossing[2], m = 0;
@@ -333,25 +366,67 @@ Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double
   return best;
 }
 
-std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                                      const AtomLocator& locator, const AtomLocator& vdw, std::vector<Loop>& loops,
-                                      const ChannelOptions& o) {
+std::vector<int> faces_near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) {
+  std::vector<int> out;
+  const double r2 = r * r;
+  for (std::size_t f = 0; f < surface.faces.size(); ++f) {
+    const auto& a = surface.vertices[std::size_t(surface.faces[f][0])];
+    const double d2 = (a[0] - p[0]) * (a[0] - p[0]) + (a[1] - p[1]) * (a[1] - p[1]) + (a[2] - p[2]) * (a[2] - p[2]);
+    if (d2 <= r2) out.push_back(int(f));
+  }
+  return out;
+}
+}  // namespace
+
+Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
+                             double max_radius) {
+  return section_of(surface, faces_near(surface, p, max_radius + 1), p, n, max_radius);
+}
+
+namespace {
+// On a bumpy wall with gaps between atoms the plane normal to the axis can leak out through a gap; planes
+// tilted up to 40 degrees are tried too and the shortest closed curve around the bottleneck is kept.
+Polyline3 best_section(const SurfaceMesh& surface, const V3& p, const V3& axis, double rb) {
+  const double R = rb + 6.0;
+  std::vector<int> faces = faces_near(surface, arr(p), R + 1);
+  V3 e1 = std::abs(axis[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
+  e1 = (e1 - e1.dot(axis) * axis).normalized();
+  const V3 e2 = axis.cross(e1);
+  Polyline3 best;
+  double best_len = 1e300;
+  for (int tilt = 0; tilt <= 40; tilt += 10)
+    for (int k = 0; k < (tilt ? 8 : 1); ++k) {
+      const double t = tilt * M_PI / 180, ph = k * M_PI / 4;
+      const V3 n = std::cos(t) * axis + std::sin(t) * (std::cos(ph) * e1 + std::sin(ph) * e2);
+      Polyline3 sec = section_of(surface, faces, arr(p), arr(n), R);
+      if (sec.empty()) continue;
+      const double len = closed_length(sec);
+      if (len < best_len) best_len = len, best = std::move(sec);
+      if (tilt == 0) return best;
+    }
+  return best;
+}
+}  // namespace
+
+std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh& surface, const AtomLocator& locator,
+                                      const AtomLocator& vdw, const std::vector<Choke>& chokes, const ChannelOptions& o) {
   std::vector<int> tunnel;
-  for (std::size_t i = 0; i < loops.size(); ++i)
-    if (loops[i].choke.side == Side::Tunnel) tunnel.push_back(int(i));
+  for (std::size_t i = 0; i < chokes.size(); ++i)
+    if (chokes[i].side == Side::Tunnel) tunnel.push_back(int(i));
   std::vector<Channel> out(tunnel.size());
   const double h = grid.voxel_size;
   tbb::parallel_for(std::size_t(0), tunnel.size(), [&](std::size_t t) {
     Channel& ch = out[t];
-    Loop& loop = loops[std::size_t(tunnel[t])];
+    const Choke& choke = chokes[std::size_t(tunnel[t])];
     ch.loop = tunnel[t];
-    ch.grid_radius = loop.choke.depth;
-    if (!refine_bottleneck(locator, loop.choke.point, std::max(o.search_radius, 3 * h), ch)) {
-      ch.bottleneck = loop.choke.point;
-      ch.bottleneck_radius = locator.distance(loop.choke.point);
-      ch.axis = loop.found ? loop.normal : std::array<double, 3>{0, 0, 1};
-      ch.note = "no exact bottleneck within " + std::to_string(std::max(o.search_radius, 3 * h)).substr(0, 4) +
-                " A of the grid's choke; the grid's choke point is reported";
+    ch.grid_radius = choke.depth;
+    const double search = std::max(o.search_radius, 3 * h);
+    if (!refine_bottleneck(locator, choke.point, search, ch)) {
+      ch.bottleneck = choke.point;
+      ch.bottleneck_radius = locator.distance(choke.point);
+      char buf[120];
+      std::snprintf(buf, sizeof buf, "no exact bottleneck within %.2f A of the grid's choke; the grid's choke point is reported", search);
+      ch.note = buf;
     }
     const V3 p = v3(ch.bottleneck), n = v3(ch.axis).normalized();
     const double rb = ch.bottleneck_radius;
@@ -388,24 +463,8 @@ std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh&
     ch.open[0] = sides[0].open;
     ch.open[1] = sides[1].open;
     if (o.section_loops && ch.refined) {
-      Polyline3 sec;
-      for (double R = rb + 3.0; R <= rb + 3.0 + 32 && sec.empty(); R *= 2) sec = cross_section_loop(surface, ch.bottleneck, ch.axis, R);
-      if (!sec.empty()) {
-        ch.section_length = closed_length(sec);
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "loop: the surface's cross-section at the exact bottleneck (membrane loop %s)",
-                      loop.found ? (std::to_string(loop.length).substr(0, 6) + " A").c_str() : "not found");
-        const bool was_found = loop.found;
-        loop.points = sec;
-        loop.found = true;
-        try {
-          loop.edge_path = snap_polyline_to_edge_path(surface, adjacency, sec);
-        } catch (const std::exception&) {
-          loop.edge_path.clear();
-        }
-        describe(loop);
-        loop.note = was_found || loop.note.empty() ? buf : loop.note + "; " + buf;
-      }
+      ch.section = best_section(surface, p, n, rb);
+      ch.section_length = ch.section.empty() ? 0 : closed_length(ch.section);
     }
   });
   return out;

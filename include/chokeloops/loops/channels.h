@@ -25,10 +25,10 @@
 namespace chokeloops {
 
 struct ChannelOptions {
-  double bulk_radius = 6.0;       // Å: the profile ends where f reaches max(this, 1.5 x bottleneck)
+  double bulk_radius = 5.0;       // Å: the profile ends where f reaches max(this, 1.5 x bottleneck) (HOLE's endrad)
   double lining_margin = 0.5;     // Å: an atom lines the path where its surface is within radius + this
   double search_radius = 1.5;     // Å: how far from the grid's choke the exact bottleneck may lie
-  bool section_loops = true;      // replace tunnel loops by the surface's cross-section at the bottleneck
+  bool section_loops = true;      // tunnel loops are the surface's cross-section at the bottleneck where one is found
 };
 
 struct ProfilePoint {
@@ -55,16 +55,20 @@ struct Channel {
   bool open[2] = {false, false};   // each end reached the bulk (false: ends in a cavity)
   std::vector<LiningAtom> lining;             // along the path, by distance
   std::vector<LiningAtom> bottleneck_lining;  // at the bottleneck, by distance
-  double section_length = 0;       // of the cross-section loop (0: none found)
+  Polyline3 section;               // the surface's cross-section around the bottleneck (empty: none found)
+  double section_length = 0;
   std::string note;
 };
 
-// `locator` holds the spheres the chosen surface's distance is measured against (vdW radii, + probe for SAS);
-// `vdw` the van der Waals spheres (lining distances). Loops of tunnel chokes whose cross-section is found
-// are replaced by it (options.section_loops). Parallel; the result does not depend on the thread count.
-std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                                      const AtomLocator& locator, const AtomLocator& vdw, std::vector<Loop>& loops,
+// One channel per tunnel choke, in the order of `chokes` (Channel::loop = the choke's index). `locator`
+// holds the spheres the chosen surface's distance is measured against (vdW radii, + probe for SAS); `vdw`
+// the van der Waals spheres (lining distances). Parallel; the result does not depend on the thread count.
+std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh& surface, const AtomLocator& locator,
+                                      const AtomLocator& vdw, const std::vector<Choke>& chokes,
                                       const ChannelOptions& options = {});
+
+// A tunnel loop made of a cross-section (Channel::section), snapped to surface edges for the topology checks.
+Loop section_loop(const Choke& choke, const Polyline3& section, const SurfaceMesh& surface, const MeshAdjacency& adjacency);
 
 // The index-2 critical point of f nearest `x0` within `search_radius` (false if none).
 bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& x0, double search_radius,
