@@ -369,29 +369,75 @@ Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, 
   return best;
 }
 
-std::vector<int> faces_near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) {
-  std::vector<int> out;
-  const double r2 = r * r;
-  for (std::size_t f = 0; f < surface.faces.size(); ++f) {
-    const auto& a = surface.vertices[std::size_t(surface.faces[f][0])];
-    const double d2 = (a[0] - p[0]) * (a[0] - p[0]) + (a[1] - p[1]) * (a[1] - p[1]) + (a[2] - p[2]) * (a[2] - p[2]);
-    if (d2 <= r2) out.push_back(int(f));
+// Faces bucketed by their first vertex in cubic cells, so that each tunnel looks only at the faces near it.
+class FaceCells {
+ public:
+  FaceCells(const SurfaceMesh& surface, double cell) : cell_(cell) {
+    lo_ = {1e300, 1e300, 1e300};
+    std::array<double, 3> hi{-1e300, -1e300, -1e300};
+    for (auto& v : surface.vertices)
+      for (int a = 0; a < 3; ++a) lo_[a] = std::min(lo_[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+    if (surface.vertices.empty()) lo_ = hi = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, int((hi[a] - lo_[a]) / cell_) + 1);
+    std::vector<int> id(surface.faces.size());
+    start_.assign(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
+    for (std::size_t f = 0; f < surface.faces.size(); ++f) {
+      id[f] = cell_of(surface.vertices[std::size_t(surface.faces[f][0])]);
+      start_[std::size_t(id[f]) + 1]++;
+    }
+    for (std::size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
+    items_.resize(surface.faces.size());
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t f = 0; f < surface.faces.size(); ++f) items_[std::size_t(fill[std::size_t(id[f])]++)] = int(f);
   }
-  return out;
-}
+  // faces whose first vertex is within r of p, in increasing order
+  std::vector<int> near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) const {
+    std::vector<int> out;
+    int a0[3], a1[3];
+    for (int a = 0; a < 3; ++a) {
+      a0[a] = std::max(0, int(std::floor((p[a] - r - lo_[a]) / cell_)));
+      a1[a] = std::min(n_[a] - 1, int(std::floor((p[a] + r - lo_[a]) / cell_)));
+      if (a0[a] > a1[a]) return out;
+    }
+    for (int k = a0[2]; k <= a1[2]; ++k)
+      for (int j = a0[1]; j <= a1[1]; ++j)
+        for (int i = a0[0]; i <= a1[0]; ++i) {
+          const std::size_t c = std::size_t(i + n_[0] * (j + n_[1] * k));
+          for (int t = start_[c]; t < start_[c + 1]; ++t) {
+            const int f = items_[std::size_t(t)];
+            const auto& v = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
+            const double d2 = (v[0] - p[0]) * (v[0] - p[0]) + (v[1] - p[1]) * (v[1] - p[1]) + (v[2] - p[2]) * (v[2] - p[2]);
+            if (d2 <= r * r) out.push_back(f);
+          }
+        }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+ private:
+  int cell_of(const std::array<double, 3>& v) const {
+    int ijk[3];
+    for (int a = 0; a < 3; ++a) ijk[a] = std::clamp(int((v[a] - lo_[a]) / cell_), 0, n_[a] - 1);
+    return ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]);
+  }
+  double cell_;
+  std::array<double, 3> lo_{};
+  std::array<int, 3> n_{};
+  std::vector<int> start_, items_;
+};
 }  // namespace
 
 Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
                              double max_radius) {
-  return section_of(surface, faces_near(surface, p, max_radius + 1), p, n, max_radius);
+  return section_of(surface, FaceCells(surface, 2.0).near(surface, p, max_radius + 1), p, n, max_radius);
 }
 
 namespace {
 // On a bumpy wall with gaps between atoms the plane normal to the axis can leak out through a gap; planes
 // tilted up to 40 degrees are tried too and the shortest closed curve around the bottleneck is kept.
-Polyline3 best_section(const SurfaceMesh& surface, const V3& p, const V3& axis, double rb) {
+Polyline3 best_section(const SurfaceMesh& surface, const FaceCells& cells, const V3& p, const V3& axis, double rb) {
   const double R = rb + 3.5;
-  std::vector<int> faces = faces_near(surface, arr(p), R + 1);
+  std::vector<int> faces = cells.near(surface, arr(p), R + 1);
   V3 e1 = std::abs(axis[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
   e1 = (e1 - e1.dot(axis) * axis).normalized();
   const V3 e2 = axis.cross(e1);
@@ -418,6 +464,7 @@ std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh&
     if (chokes[i].side == Side::Tunnel) tunnel.push_back(int(i));
   std::vector<Channel> out(tunnel.size());
   const double h = grid.voxel_size;
+  const FaceCells cells(surface, 2.0);
   tbb::parallel_for(std::size_t(0), tunnel.size(), [&](std::size_t t) {
     Channel& ch = out[t];
     const Choke& choke = chokes[std::size_t(tunnel[t])];
@@ -466,7 +513,7 @@ std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh&
     ch.open[0] = sides[0].open;
     ch.open[1] = sides[1].open;
     if (o.section_loops && ch.refined) {
-      ch.section = best_section(surface, p, n, rb);
+      ch.section = best_section(surface, cells, p, n, rb);
       ch.section_length = ch.section.empty() ? 0 : closed_length(ch.section);
     }
   });
