@@ -47,6 +47,7 @@ Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are wri
   --radii bondi|amber       van der Waals radii: Bondi 1964 (default) or HOLE's simple.rad (amber)
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
   --probe R                 probe radius for sas/ses, Å (default 1.4)
+  --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
 Exit codes: 0 success, 2 bad input, 3 out of resources.
 )";
 
@@ -124,6 +125,9 @@ int run(std::vector<std::string> args) {
       molecule.field.probe = in.number();
       if (!(molecule.field.probe > 0)) throw Error("--probe must be positive (" + in.see_help() + ")");
       molecule_flags.push_back("--probe");
+    } else if (in.is("--sections-only")) {
+      molecule.channels.trace_unsectioned = false;
+      molecule_flags.push_back("--sections-only");
     } else if (in.is("--resolution")) {
       grid_flags.push_back("--resolution");
       if (in.peek() == "auto") options.resolution_auto = in.value() == "auto";

@@ -84,8 +84,16 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   }
   std::vector<Choke> rest;
   std::vector<std::size_t> rest_index;
-  for (std::size_t i = 0; i < r.chokes.chokes.size(); ++i)
-    if (!done[i]) rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
+  for (std::size_t i = 0; i < r.chokes.chokes.size(); ++i) {
+    if (done[i]) continue;
+    if (r.chokes.chokes[i].side == Side::Tunnel && !options.channels.trace_unsectioned) {
+      r.loops[i].choke = r.chokes.chokes[i];
+      r.loops[i].note = "no cross-section of the surface around the bottleneck; membranes not traced (--sections-only)";
+      done[i] = true;
+      continue;
+    }
+    rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
+  }
   std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology.get());
   for (std::size_t k = 0; k < traced.size(); ++k) r.loops[rest_index[k]] = std::move(traced[k]);
   r.timings_ms["loops"] = ms(t);

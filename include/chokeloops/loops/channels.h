@@ -28,6 +28,8 @@ struct ChannelOptions {
   double bulk_radius = 5.0;       // Å: the profile ends where f reaches max(this, 1.5 x bottleneck) (HOLE's endrad)
   double lining_margin = 0.5;     // Å: an atom lines the path where its surface is within radius + this
   double search_radius = 1.5;     // Å: how far from the grid's choke the exact bottleneck may lie
+  bool trace_unsectioned = true;  // tunnel chokes without a valid cross-section get membrane loops (slow on
+                                  // big proteins: thousands of generators); false: a note instead
   bool section_loops = true;      // tunnel loops are the surface's cross-section at the bottleneck where one is found
 };
 
