@@ -1,6 +1,7 @@
 // `chokeloops analyze INPUT -o OUTDIR`: every stage, the report files, the viewer page and a summary.
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include <memory>
 
 #include "chokeloops/analyze.h"
+#include "chokeloops/analyze_molecule.h"
 #include "chokeloops/output/view.h"
 #include "args.h"
 #include "command.h"
@@ -18,7 +20,8 @@ namespace {
 
 const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
 
-INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
+INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, or a molecule (.pdb .cif .ent
+.mmcif, optionally .gz; lengths in Å, default --voxel-size 0.25).
   -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
   --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
                             a closed input mesh's genus and components (up to 1024 or --max-memory)
@@ -39,6 +42,14 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
+Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are written too):
+  --model N                 model number (default 1)
+  --chains A,B              keep only these chains (default all)
+  --ignore RES,...          residue names to drop (default waters and common ions; "" keeps all)
+  --radii bondi|amber       van der Waals radii: Bondi 1964 (default) or HOLE's simple.rad (amber)
+  --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
+  --probe R                 probe radius for sas/ses, Å (default 1.4)
+  --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
 Exit codes: 0 success, 2 bad input, 3 out of resources, 4 internal error (a bug: please report it).
 )";
 
@@ -71,8 +82,24 @@ class Progress {
   std::string last_;
 };
 
+std::vector<std::string> split_list(const std::string& v) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : v + ",") {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  return out;
+}
+
 int run(std::vector<std::string> args) {
   AnalyzeOptions options;
+  MoleculeOptions molecule;
+  std::vector<std::string> molecule_flags, grid_flags;
   std::string input, outdir, png;
   bool quiet = false, view = true;
   int threads = 0;
@@ -80,7 +107,31 @@ int run(std::vector<std::string> args) {
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
     else if (in.is("-o", "--output")) outdir = in.value();
-    else if (in.is("--resolution")) {
+    else if (in.is("--model")) molecule.read.model = int(in.integer(1, 1000000)), molecule_flags.push_back("--model");
+    else if (in.is("--chains")) molecule.read.chains = split_list(in.value()), molecule_flags.push_back("--chains");
+    else if (in.is("--ignore")) {
+      molecule.read.ignore = split_list(in.value());
+      molecule.read.ignore_set = true;
+      molecule_flags.push_back("--ignore");
+    } else if (in.is("--radii")) {
+      std::string v = in.value();
+      if (v != "bondi" && v != "amber") throw Error("--radii must be bondi or amber (" + in.see_help() + ")");
+      molecule.read.radii = v == "amber" ? RadiusSet::Amber : RadiusSet::Bondi;
+      molecule_flags.push_back("--radii");
+    } else if (in.is("--surface")) {
+      std::string v = in.value();
+      if (v != "vdw" && v != "sas" && v != "ses") throw Error("--surface must be vdw, sas or ses (" + in.see_help() + ")");
+      molecule.field.surface = v == "sas" ? MolecularSurface::Sas : v == "ses" ? MolecularSurface::Ses : MolecularSurface::Vdw;
+      molecule_flags.push_back("--surface");
+    } else if (in.is("--probe")) {
+      molecule.field.probe = in.number();
+      if (!(molecule.field.probe > 0)) throw Error("--probe must be positive (" + in.see_help() + ")");
+      molecule_flags.push_back("--probe");
+    } else if (in.is("--sections-only")) {
+      molecule.channels.trace_unsectioned = false;
+      molecule_flags.push_back("--sections-only");
+    } else if (in.is("--resolution")) {
+      grid_flags.push_back("--resolution");
       if (in.peek() == "auto") options.resolution_auto = in.value() == "auto";
       else options.levelset.resolution = int(in.integer(8, 4096));
     } else if (in.is("--voxel-size")) {
@@ -110,6 +161,48 @@ int run(std::vector<std::string> args) {
   auto limit = cli::limit_threads(threads);
 
   Progress progress(quiet);
+  if (is_molecule_path(input)) {
+    if (!grid_flags.empty() || options.resolution_auto)
+      throw Error("--resolution does not apply to molecules; use --voxel-size in Å (" + std::string("see chokeloops analyze --help") + ")");
+    MoleculeAnalysis m = analyze_molecule(input, options, molecule, std::ref(progress));
+    auto t = std::chrono::steady_clock::now();
+    write_report(m.result, options, outdir);
+    write_molecule_report(m, molecule, outdir);
+    if (view) write_view_html(outdir);
+    if (!png.empty()) render_png(outdir, png);
+    double report_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    for (auto& w : m.result.warnings) std::cerr << "chokeloops analyze: warning: " << w << "\n";
+    AnalyzeResult& r = m.result;
+    int counts[2][2] = {{0, 0}, {0, 0}};
+    for (auto& l : r.loops) counts[l.choke.side == Side::Tunnel][l.choke.kind == Kind::Choke] += 1;
+    std::printf("%s: %zu atoms, %s surface, grid %dx%dx%d (voxel %.4g A), surface %lld vertices, genus %d, %d component(s)\n",
+                input.c_str(), m.molecule.atoms.size(), to_string(molecule.field.surface), r.grid.dims[0], r.grid.dims[1],
+                r.grid.dims[2], r.grid.voxel_size, (long long)r.surface_stats.vertices, r.surface_stats.genus,
+                r.surface_stats.components);
+    std::printf("handle loops: %d generator(s), %d choke(s)   tunnel loops: %d generator(s), %d choke(s)\n", counts[0][0],
+                counts[0][1], counts[1][0], counts[1][1]);
+    // the widest tunnels first: what a HOLE user looks for
+    std::vector<const Channel*> order;
+    for (auto& c : m.channels) order.push_back(&c);
+    std::stable_sort(order.begin(), order.end(), [&](const Channel* a, const Channel* b) {
+      return r.loops[std::size_t(a->loop)].choke.persistence > r.loops[std::size_t(b->loop)].choke.persistence;
+    });
+    for (std::size_t i = 0; i < order.size() && i < 5; ++i) {
+      const Channel& c = *order[i];
+      const Loop& l = r.loops[std::size_t(c.loop)];
+      std::printf("  tunnel %d (%s, persistence %.3g): bottleneck %.3f A at (%.2f, %.2f, %.2f), path %.1f A, %d open end(s), loop %.2f A\n",
+                  c.loop, to_string(l.choke.kind), l.choke.persistence, c.bottleneck_radius, c.bottleneck[0],
+                  c.bottleneck[1], c.bottleneck[2], c.length, int(c.open[0]) + int(c.open[1]), l.found ? l.length : 0.0);
+    }
+    std::printf("time: read %.0f ms, field %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, channels %.0f ms, report %.0f ms, total %.0f ms\n",
+                r.timings_ms["read"], r.timings_ms["levelset"], r.timings_ms["persistence"], r.timings_ms["surface"],
+                r.timings_ms["loops"], r.timings_ms["channels"], report_ms, r.timings_ms["total"] + report_ms);
+    std::printf("wrote %s/{surface.ply,loops.*,tunnels.csv,profiles.csv,lining.csv,channels.pdb,view.pml%s}\n", outdir.c_str(),
+                view ? ",view.html" : "");
+    return 0;
+  }
+  if (!molecule_flags.empty())
+    throw Error(molecule_flags.front() + " applies to molecules only (.pdb/.cif input; see chokeloops analyze --help)");
   AnalyzeResult r = analyze(input, options, std::ref(progress));
   auto t = std::chrono::steady_clock::now();
   write_report(r, options, outdir);

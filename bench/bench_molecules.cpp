@@ -1,0 +1,140 @@
+// Molecules end to end (issue 11): gramicidin A and maltoporin at 0.25 Å, and a lattice of maltoporin copies
+// (>= 100K atoms) at 0.5 Å. Each run is a fresh process (this program re-executed with --child), as the CLI
+// runs; per-stage medians over --runs and the largest peak RSS.
+//
+//   bench_molecules [--runs 3] [--data data] [--only gramicidin|maltoporin|lattice]
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "chokeloops/analyze_molecule.h"
+
+using namespace chokeloops;
+
+namespace {
+
+const char* kStages[] = {"read", "levelset", "persistence", "surface", "channels", "loops", "check", "total"};
+
+// Copies of a structure on a lattice, written as mmCIF-free PDB (serials wrap; chains renamed per copy).
+std::string make_lattice(const std::string& src, int copies, const std::string& out) {
+  Molecule m = read_molecule(src);
+  std::array<double, 3> lo{1e9, 1e9, 1e9}, hi{-1e9, -1e9, -1e9};
+  for (auto& a : m.atoms)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], a.pos[k]), hi[k] = std::max(hi[k], a.pos[k]);
+  const char* ids = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789";
+  std::map<std::string, int> chain_index;
+  std::ofstream f(out);
+  int serial = 0;
+  const int nx = (copies + 1) / 2;
+  for (int c = 0; c < copies; ++c) {
+    const double dx = (c % nx) * (hi[0] - lo[0] + 4), dy = (c / nx) * (hi[1] - lo[1] + 4);
+    for (auto& a : m.atoms) {
+      int ci = chain_index.emplace(a.chain, int(chain_index.size())).first->second;
+      char chain = ids[(c * 4 + ci) % 62];
+      char line[128];
+      std::snprintf(line, sizeof line, "ATOM  %5d %-4s %3s %c%4d    %8.3f%8.3f%8.3f  1.00  0.00          %2s\n",
+                    ++serial % 100000, a.name.size() < 4 ? (" " + a.name).c_str() : a.name.c_str(), a.resname.c_str(),
+                    chain, a.resseq % 10000, a.pos[0] + dx, a.pos[1] + dy, a.pos[2], a.element.c_str());
+      f << line;
+    }
+  }
+  f << "END\n";
+  return std::to_string(serial);
+}
+
+int child(const std::string& file, double voxel) {
+  AnalyzeOptions ao;
+  ao.levelset.voxel_size = voxel;
+  MoleculeOptions mo;
+  try {
+    MoleculeAnalysis m = analyze_molecule(file, ao, mo);
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    int tunnels = 0, handles = 0;
+    for (auto& l : m.result.loops) (l.choke.side == Side::Tunnel ? tunnels : handles) += 1;
+    std::printf("RESULT atoms %zu dims %dx%dx%d handles %d tunnels %d peak_mb %.0f", m.molecule.atoms.size(),
+                m.result.grid.dims[0], m.result.grid.dims[1], m.result.grid.dims[2], handles, tunnels, ru.ru_maxrss / 1024.0);
+    for (const char* s : kStages) std::printf(" %s %.1f", s, m.result.timings_ms[s]);
+    std::printf("\n");
+  } catch (const std::exception& e) {
+    std::printf("ERROR %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 3;
+  std::string data = CHOKELOOPS_SOURCE_DIR "/data", only;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--child" && i + 2 < argc) return child(argv[i + 1], std::atof(argv[i + 2]));
+    if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--data" && i + 1 < argc) data = argv[++i];
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
+  }
+  struct Case { std::string name, file; double voxel; };
+  std::vector<Case> cases = {{"gramicidin", data + "/molecules/1grm_single_hole2.pdb", 0.25},
+                             {"maltoporin", data + "/molecules/1af6_hole2.pdb", 0.25}};
+  if (only.empty() || only == "lattice") {
+    std::string lattice = (std::filesystem::temp_directory_path() / "chokeloops_bench_lattice.pdb").string();
+    std::string n = make_lattice(data + "/molecules/1af6_hole2.pdb", 10, lattice);
+    std::printf("lattice: 10 copies of maltoporin, %s atoms, %s\n", n.c_str(), lattice.c_str());
+    cases.push_back({"lattice", lattice, 0.5});
+  }
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  for (auto& c : cases) {
+    if (!only.empty() && only != c.name) continue;
+    std::map<std::string, std::vector<double>> t;
+    std::string info;
+    double peak = 0;
+    for (int r = 0; r < runs; ++r) {
+      char voxel[32];
+      std::snprintf(voxel, sizeof voxel, "%g", c.voxel);
+      std::string cmd = "'" + self + "' --child '" + c.file + "' " + voxel;
+      FILE* p = popen(cmd.c_str(), "r");
+      char buf[4096];
+      std::string out;
+      while (p && fgets(buf, sizeof buf, p)) out += buf;
+      if (p) pclose(p);
+      std::istringstream in(out);
+      std::string word;
+      in >> word;
+      if (word != "RESULT") {
+        std::printf("%s: %s", c.name.c_str(), out.c_str());
+        break;
+      }
+      std::string key, value;
+      std::ostringstream head;
+      while (in >> key >> value) {
+        bool stage = false;
+        for (const char* s : kStages) stage |= key == s;
+        if (stage) t[key].push_back(std::atof(value.c_str()));
+        else if (key == "peak_mb") peak = std::max(peak, std::atof(value.c_str()));
+        else head << key << " " << value << " ";
+      }
+      info = head.str();
+    }
+    std::printf("%-11s voxel %.2f A  %s peak RSS %.0f MB\n  median of %d (ms):", c.name.c_str(), c.voxel, info.c_str(), peak, runs);
+    for (const char* s : kStages) {
+      auto v = t[s];
+      std::sort(v.begin(), v.end());
+      std::printf(" %s %.0f", s, v.empty() ? 0.0 : v[v.size() / 2]);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}

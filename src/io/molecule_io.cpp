@@ -1,0 +1,234 @@
+// Molecule input: gemmi parses, this file only chooses what to keep and which radius each atom gets.
+#include "chokeloops/io/molecule_io.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <gemmi/cif.hpp>
+#include <gemmi/mmcif.hpp>
+#include <gemmi/pdb.hpp>
+
+#include "chokeloops/grid.h"
+
+namespace chokeloops {
+
+namespace {
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = char(std::tolower((unsigned char)c));
+  return s;
+}
+bool ends_with(const std::string& s, const std::string& t) {
+  return s.size() >= t.size() && s.compare(s.size() - t.size(), t.size(), t) == 0;
+}
+std::string strip_gz(const std::string& path) {
+  std::string l = lower(path);
+  return ends_with(l, ".gz") ? l.substr(0, l.size() - 3) : l;
+}
+bool is_cif(const std::string& path) {
+  std::string b = strip_gz(path);
+  return ends_with(b, ".cif") || ends_with(b, ".mmcif");
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw Error(path + ": " + what, 2);
+}
+
+// gemmi reads a truncated .gz without complaint; zlib's close says whether the stream ended properly.
+std::string read_all(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
+  if (std::filesystem::is_directory(path, ec)) fail(path, "is a directory, not a structure file");
+  std::string text;
+  if (ends_with(lower(path), ".gz")) {
+    gzFile f = gzopen(path.c_str(), "rb");
+    if (!f) fail(path, "cannot open");
+    char buf[1 << 16];
+    int n;
+    while ((n = gzread(f, buf, sizeof buf)) > 0) text.append(buf, std::size_t(n));
+    int err = 0;
+    std::string msg = n < 0 ? gzerror(f, &err) : "";
+    int close = gzclose_r(f);
+    if (n < 0) fail(path, "corrupt gzip data (" + msg + ")");
+    if (close != Z_OK) fail(path, "truncated or corrupt gzip file");
+  } else {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, "cannot open");
+    std::ostringstream s;
+    s << in.rdbuf();
+    text = s.str();
+  }
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) fail(path, "empty file");
+  return text;
+}
+
+// HOLE's example files carry a line number in columns 73-80, so columns 77-80 hold digits, not an element
+// and a charge, and gemmi refuses the "charge". Those columns are blanked, gemmi then takes the element from
+// the atom name, and the user is told.
+int blank_digit_element_columns(std::string& text) {
+  int count = 0;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    if (end - pos > 77 && (text.compare(pos, 4, "ATOM") == 0 || text.compare(pos, 6, "HETATM") == 0)) {
+      char a = text[pos + 76], b = text[pos + 77];
+      if (!std::isalpha((unsigned char)a) && !std::isalpha((unsigned char)b) &&
+          (std::isdigit((unsigned char)a) || std::isdigit((unsigned char)b))) {
+        for (std::size_t c = pos + 76; c < end && c < pos + 80; ++c)
+          if (text[c] != '\r') text[c] = ' ';
+        ++count;
+      }
+    }
+    pos = end + 1;
+  }
+  return count;
+}
+
+struct Radius {
+  const char* element;
+  double r;
+};
+// Bondi, J. Phys. Chem. 68, 441 (1964), Table I.
+const Radius kBondi[] = {{"H", 1.20},  {"HE", 1.40}, {"LI", 1.82}, {"C", 1.70},  {"N", 1.55},  {"O", 1.52},
+                         {"F", 1.47},  {"NE", 1.54}, {"NA", 2.27}, {"MG", 1.73}, {"SI", 2.10}, {"P", 1.80},
+                         {"S", 1.80},  {"CL", 1.75}, {"AR", 1.88}, {"K", 2.75},  {"NI", 1.63}, {"CU", 1.40},
+                         {"ZN", 1.39}, {"GA", 1.87}, {"AS", 1.85}, {"SE", 1.90}, {"BR", 1.85}, {"KR", 2.02},
+                         {"PD", 1.63}, {"AG", 1.72}, {"CD", 1.58}, {"IN", 1.93}, {"SN", 2.17}, {"TE", 2.06},
+                         {"I", 1.98},  {"XE", 2.16}, {"PT", 1.72}, {"AU", 1.66}, {"HG", 1.55}, {"TL", 1.96},
+                         {"PB", 2.02}, {"U", 1.86}};
+// HOLE's simple.rad (AMBER united-atom radii as HOLE distributes them).
+const Radius kAmber[] = {{"C", 1.85}, {"O", 1.65}, {"N", 1.75}, {"S", 2.00}, {"H", 1.00}, {"P", 2.10}};
+constexpr double kFallbackRadius = 2.0;
+
+template <std::size_t N>
+const Radius* find(const Radius (&table)[N], const std::string& e) {
+  for (auto& r : table)
+    if (e == r.element) return &r;
+  return nullptr;
+}
+
+}  // namespace
+
+const std::vector<std::string>& default_ignored_residues() {
+  static const std::vector<std::string> v = {"HOH", "WAT", "H2O", "DOD", "SOL", "TIP", "TIP3", "SPC",
+                                             "NA",  "K",   "CL",  "CA",  "MG",  "ZN",  "MN",   "LI",
+                                             "RB",  "CS",  "BR",  "IOD", "F",   "SR",  "BA",   "CD"};
+  return v;
+}
+
+bool is_molecule_path(const std::string& path) {
+  std::string b = strip_gz(path);
+  for (const char* e : {".pdb", ".ent", ".cif", ".mmcif"})
+    if (ends_with(b, e)) return true;
+  return false;
+}
+
+double element_radius(const std::string& element, RadiusSet set, bool* known) {
+  if (set == RadiusSet::Amber)
+    if (const Radius* r = find(kAmber, element)) {
+      if (known) *known = true;
+      return r->r;
+    }
+  const Radius* b = find(kBondi, element);
+  if (known) *known = set == RadiusSet::Bondi && b;
+  return b ? b->r : kFallbackRadius;
+}
+
+Molecule read_molecule(const std::string& path, const MoleculeReadOptions& options) {
+  std::string text = read_all(path);
+  const int digit_elements = is_cif(path) ? 0 : blank_digit_element_columns(text);
+  gemmi::Structure st;
+  try {
+    if (is_cif(path))
+      st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
+    else
+      st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
+  } catch (const std::exception& e) {
+    std::string m = e.what();
+    m = m.substr(0, m.find('\n'));
+    fail(path, "cannot be read as " + std::string(is_cif(path) ? "mmCIF" : "PDB") + " (" + m + ")");
+  }
+  Molecule mol;
+  mol.path = path;
+  mol.model = options.model;
+  if (st.models.empty()) fail(path, "no atoms (not a PDB/mmCIF coordinate file?)");
+  const gemmi::Model* model = nullptr;
+  for (auto& m : st.models)
+    if (m.name == std::to_string(options.model)) model = &m;
+  if (!model && st.models.size() == 1 && options.model == 1) model = &st.models[0];
+  if (!model) fail(path, "has no model " + std::to_string(options.model) + " (it has " +
+                             std::to_string(st.models.size()) + " model(s))");
+
+  const std::vector<std::string>& ignore = options.ignore_set ? options.ignore : default_ignored_residues();
+  std::set<std::string> ignored(ignore.begin(), ignore.end());
+  std::set<std::string> chains(options.chains.begin(), options.chains.end());
+  std::map<std::string, std::pair<int, double>> unknown;  // element -> (atoms, radius used)
+  int total = 0;
+  for (const gemmi::Chain& ch : model->chains) {
+    for (const gemmi::Residue& res : ch.residues) {
+      for (std::size_t ai = 0; ai < res.atoms.size(); ++ai) {
+        const gemmi::Atom& a = res.atoms[ai];
+        ++total;
+        if (!chains.empty() && !chains.count(ch.name)) continue;
+        if (ignored.count(res.name)) continue;
+        if (a.altloc) {  // keep the highest occupancy of the atoms of this name (the first on a tie)
+          bool best = true;
+          for (std::size_t bi = 0; bi < res.atoms.size() && best; ++bi) {
+            const gemmi::Atom& b = res.atoms[bi];
+            if (bi == ai || !b.altloc || b.name != a.name) continue;
+            if (b.occ > a.occ || (b.occ == a.occ && bi < ai)) best = false;
+          }
+          if (!best) continue;
+        }
+        if (!std::isfinite(a.pos.x) || !std::isfinite(a.pos.y) || !std::isfinite(a.pos.z) ||
+            std::abs(a.pos.x) > 1e6 || std::abs(a.pos.y) > 1e6 || std::abs(a.pos.z) > 1e6)
+          fail(path, "atom " + std::to_string(a.serial) + " (" + a.name + " " + res.name + " " + ch.name +
+                         ") has a non-finite or absurd coordinate");
+        MolAtom m;
+        m.pos = {a.pos.x, a.pos.y, a.pos.z};
+        m.element = a.element.uname();
+        m.name = a.name;
+        m.resname = res.name;
+        m.chain = ch.name;
+        m.resseq = res.seqid.num.has_value() ? int(res.seqid.num.value) : 0;
+        m.icode = res.seqid.icode;
+        bool known = true;
+        m.radius = element_radius(m.element, options.radii, &known);
+        if (!known) {
+          auto& u = unknown[m.element];
+          u.first += 1;
+          u.second = m.radius;
+        }
+        mol.atoms.push_back(std::move(m));
+      }
+    }
+  }
+  mol.ignored_atoms = total - int(mol.atoms.size());
+  if (mol.atoms.empty()) {
+    if (total == 0) fail(path, "no atoms (not a PDB/mmCIF coordinate file?)");
+    fail(path, "no atoms left after the filters (" + std::to_string(total) +
+                   " atoms dropped by --chains/--ignore/altlocs)");
+  }
+  if (int n = digit_elements)
+      mol.warnings.push_back(path + ": " + std::to_string(n) +
+                             " atom line(s) have digits, not an element, in columns 77-78; elements taken from "
+                             "the atom names");
+  for (auto& [e, u] : unknown) {
+    std::ostringstream s;
+    s << path << ": element " << (e.empty() ? "?" : e) << " (" << u.first << " atom(s)) has no "
+      << (options.radii == RadiusSet::Amber ? "amber" : "Bondi") << " radius; used " << u.second << " A";
+    mol.warnings.push_back(s.str());
+  }
+  return mol;
+}
+
+}  // namespace chokeloops

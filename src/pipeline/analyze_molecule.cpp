@@ -1,0 +1,123 @@
+// The molecule pipeline. It runs analyze_grid's stages itself because tunnel loops come first from the
+// exact bottlenecks (the surface's cross-section there, cheap and inside the pore) and only the chokes
+// without one, and the handles, grow membranes: on a bumpy molecular surface a membrane loop of a channel
+// can run far from the pore (gramicidin: 35.7 Å against a lumen of ~7.5 Å) and costs most of the run.
+#include "chokeloops/analyze_molecule.h"
+
+#include <chrono>
+#include <memory>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/topology.h"
+
+namespace chokeloops {
+
+MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions& analyze, const MoleculeOptions& options,
+                                  const ProgressFn& progress) {
+  using Clock = std::chrono::steady_clock;
+  auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
+  auto stage = [&](const char* s, double f) {
+    if (progress && !progress(s, f)) throw Error("interrupted");
+  };
+  const auto t0 = Clock::now();
+  stage("read", 0);
+  MoleculeAnalysis m;
+  AnalyzeResult& r = m.result;
+  r.input = path;
+  m.molecule = read_molecule(path, options.read);
+  r.timings_ms["read"] = ms(t0);
+
+  MolecularFieldOptions fo = options.field;
+  if (analyze.levelset.voxel_size > 0) fo.voxel_size = analyze.levelset.voxel_size;
+  if (analyze.levelset.margin >= 0) fo.margin = analyze.levelset.margin;
+  if (analyze.levelset.max_memory) fo.max_memory = analyze.levelset.max_memory;
+  auto t = Clock::now();
+  stage("levelset", 0);
+  r.grid = molecular_field(m.molecule, fo);
+  r.timings_ms["levelset"] = ms(t);
+
+  t = Clock::now();
+  r.diagram = lower_star_persistence(r.grid, [&](const char*, double f) { stage("persistence", f); return true; });
+  r.timings_ms["persistence"] = ms(t);
+  t = Clock::now();
+  stage("chokes", 0);
+  r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
+  r.timings_ms["chokes"] = ms(t);
+  t = Clock::now();
+  stage("surface", 0);
+  r.surface = extract_zero_surface(r.grid);
+  r.surface_stats = surface_stats(r.surface);
+  r.timings_ms["surface"] = ms(t);
+  if (!r.surface_stats.closed_manifold)
+    r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+
+  t = Clock::now();
+  stage("channels", 0);
+  std::vector<std::array<double, 3>> centres;
+  std::vector<double> vdw_radii;
+  for (auto& a : m.molecule.atoms) centres.push_back(a.pos), vdw_radii.push_back(a.radius);
+  // The SES's outside distance is the vdW one wherever a probe fits, so its bottlenecks are measured there.
+  AtomLocator vdw(centres, vdw_radii);
+  AtomLocator surf(centres, surface_radii(m.molecule, fo.surface == MolecularSurface::Sas ? MolecularSurface::Sas
+                                                                                           : MolecularSurface::Vdw, fo.probe));
+  m.channels = analyze_channels(r.grid, r.surface, surf, vdw, r.chokes.chokes, options.channels);
+  r.timings_ms["channels"] = ms(t);
+
+  t = Clock::now();
+  stage("loops", 0);
+  MeshAdjacency adjacency = build_adjacency(r.surface);
+  bool any_generator = false;
+  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
+  std::unique_ptr<SurfaceTopology> topology;
+  if (any_generator) topology = std::make_unique<SurfaceTopology>(r.surface, adjacency);
+  r.loops.assign(r.chokes.chokes.size(), Loop{});
+  std::vector<bool> done(r.chokes.chokes.size(), false);
+  for (const Channel& c : m.channels) {
+    if (c.section.empty()) continue;
+    const Choke& choke = r.chokes.chokes[std::size_t(c.loop)];
+    Loop l = section_loop(choke, c.section, r.surface, adjacency);
+    // a generator's loop must be non-contractible; a cross-section that is not falls back to the membrane
+    if (choke.kind == Kind::Generator && (l.edge_path.empty() || !topology || topology->contractible_fast(l.edge_path)))
+      continue;
+    r.loops[std::size_t(c.loop)] = std::move(l);
+    done[std::size_t(c.loop)] = true;
+  }
+  std::vector<Choke> rest;
+  std::vector<std::size_t> rest_index;
+  for (std::size_t i = 0; i < r.chokes.chokes.size(); ++i) {
+    if (done[i]) continue;
+    if (r.chokes.chokes[i].side == Side::Tunnel && !options.channels.trace_unsectioned) {
+      r.loops[i].choke = r.chokes.chokes[i];
+      r.loops[i].note = "no cross-section of the surface around the bottleneck; membranes not traced (--sections-only)";
+      done[i] = true;
+      continue;
+    }
+    rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
+  }
+  std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology.get());
+  for (std::size_t k = 0; k < traced.size(); ++k) r.loops[rest_index[k]] = std::move(traced[k]);
+  r.timings_ms["loops"] = ms(t);
+  t = Clock::now();
+  if (topology && analyze.check_generators)
+    for (std::size_t i = 0; i < r.loops.size(); ++i) {
+      Loop& l = r.loops[i];
+      if (done[i] || !l.found || l.choke.kind != Kind::Generator) continue;
+      if (topology->contractible_fast(l.edge_path)) {
+        l.found = false;
+        l.note = "the generator's loop is contractible on the surface after shortening; no valid generator loop";
+        l.points.clear();
+        l.edge_path.clear();
+      }
+    }
+  r.timings_ms["check"] = ms(t);
+  int missing = 0;
+  for (auto& l : r.loops) missing += !l.found;
+  if (missing)
+    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
+  r.warnings.insert(r.warnings.begin(), m.molecule.warnings.begin(), m.molecule.warnings.end());
+  stage("done", 1);
+  r.timings_ms["total"] = ms(t0);
+  return m;
+}
+
+}  // namespace chokeloops
