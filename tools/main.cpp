@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
     } catch (const Error& e) {
       std::cerr << "chokeloops " << name << ": error: " << e.what() << "\n";
       return e.exit_code;
+    } catch (const InternalError& e) {
+      std::cerr << "chokeloops " << name << ": internal error (a bug, please report it): " << e.what() << "\n";
+      return 4;
     } catch (const std::bad_alloc&) {
       std::cerr << "chokeloops " << name << ": error: out of memory; use a coarser --resolution\n";
       return 3;

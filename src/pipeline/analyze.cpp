@@ -68,6 +68,14 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   t = Clock::now();
   stage("chokes", 0);
   r.chokes = find_chokes(r.grid, r.diagram, options.chokes);
+  if (options.max_loops >= 0 && int(r.chokes.chokes.size()) > options.max_loops) {
+    // Tens of thousands of generators (raw probability maps): trace the most persistent first.
+    std::stable_sort(r.chokes.chokes.begin(), r.chokes.chokes.end(), [](const Choke& a, const Choke& b) {
+      return a.death - a.birth > b.death - b.birth;
+    });
+    r.loops_omitted = int(r.chokes.chokes.size()) - options.max_loops;
+    r.chokes.chokes.resize(std::size_t(options.max_loops));
+  }
   r.timings_ms["chokes"] = ms_since(t);
 
   t = Clock::now();
@@ -76,7 +84,7 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   r.surface_stats = surface_stats(r.surface);
   r.timings_ms["surface"] = ms_since(t);
   if (r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold)
-    throw std::logic_error("surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
+    throw InternalError("self-check failed: surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
                            std::to_string(r.chokes.handle_generators) + " handle generators");
   if (!r.surface_stats.closed_manifold)
     r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
