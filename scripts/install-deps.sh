@@ -9,6 +9,7 @@ PKGS=(
   libeigen3-dev libtet1.5-dev
   libgtest-dev googletest libphat-dev
   nlohmann-json3-dev
+  libnifti2-dev libteem-dev
   chromium
 )
 missing=()
