@@ -9,6 +9,7 @@
 
 #include "chokeloops/analyze.h"
 #include "chokeloops/output/view.h"
+#include "analyze_volume_cli.h"
 #include "args.h"
 #include "command.h"
 
@@ -18,7 +19,8 @@ namespace {
 
 const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
 
-INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
+INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, or a medical volume (.nii .nii.gz
+.hdr .nrrd .nhdr) with one of --iso, --label, --labels all.
   -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
   --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
                             a closed input mesh's genus and components (up to 1024 or --max-memory)
@@ -37,6 +39,16 @@ INPUT is a mesh (.obj .ply .off .stl) or a .vdb level set / density grid.
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
+  --max-loops N|all         trace loops for the N most persistent chokes only (default 200 for volumes,
+                            all otherwise); the rest are counted
+Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD; distances in mm with
+the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD) on the input's grid too):
+  --iso T                   scalar image: inside where the stored value is >= T
+  --inside above|below      below: inside where the value is < T
+  --label N                 label map: the voxels equal to N (boundary halfway between voxels)
+  --labels all              one analysis per non-zero label into OUTDIR/label_N/, index in OUTDIR/labels.json
+  --volume K                the K-th volume (from 0) of a 4D image
+  --expect-genus G          list handle generators beyond the G most persistent as topology defects
 Exit codes: 0 success, 2 bad input, 3 out of resources.
 )";
 
@@ -74,6 +86,8 @@ int run(std::vector<std::string> args) {
   std::string input, outdir, png;
   bool quiet = false, view = true;
   int threads = 0;
+  cli::VolumeCliOptions vo;
+  bool max_loops_given = false;
   cli::Args in("analyze", std::move(args));
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
@@ -100,6 +114,22 @@ int run(std::vector<std::string> args) {
     else if (in.is("--no-slide")) options.loops.slide = false;
     else if (in.is("--no-check")) options.check_generators = false;
     else if (in.is("-q", "--quiet")) quiet = true;
+    else if (in.is("--iso")) { vo.field.has_iso = true; vo.field.iso = in.number(); }
+    else if (in.is("--inside")) {
+      std::string v = in.value();
+      if (v != "above" && v != "below") throw Error("--inside must be above or below");
+      vo.field.inside_below = v == "below";
+    } else if (in.is("--label")) { vo.field.has_label = true; vo.field.label = double(in.integer(-2147483647L, 2147483647L)); }
+    else if (in.is("--labels")) {
+      if (in.value() != "all") throw Error("--labels takes 'all' (or use --label N)");
+      vo.all_labels = true;
+    } else if (in.is("--volume")) vo.volume = int(in.integer(0, 1 << 20));
+    else if (in.is("--expect-genus")) vo.expect_genus = int(in.integer(0, 1 << 30));
+    else if (in.is("--max-loops")) {
+      max_loops_given = true;
+      if (in.peek() == "all") { in.value(); options.max_loops = -1; }
+      else options.max_loops = int(in.integer(0, 1 << 30));
+    }
     else in.positional(input, "input");
   }
   if (input.empty()) throw Error("no input given (usage: chokeloops analyze INPUT -o OUTDIR)");
@@ -107,6 +137,23 @@ int run(std::vector<std::string> args) {
   auto limit = cli::limit_threads(threads);
 
   Progress progress(quiet);
+  const bool volume_input = is_volume_path(input);
+  const bool volume_options = vo.field.has_iso || vo.field.has_label || vo.all_labels || vo.volume >= 0 ||
+                              vo.expect_genus >= 0 || vo.field.inside_below;
+  if (volume_input) {
+    if (vo.all_labels && (vo.field.has_label || vo.field.has_iso))
+      throw Error("--labels all analyses every label: give it without --label / --iso");
+    if (!vo.all_labels && vo.field.has_label == vo.field.has_iso)
+      throw Error("a volume needs exactly one of --iso T (scalar image), --label N or --labels all (label map)");
+    if (options.levelset.voxel_size > 0 || options.resolution_auto)
+      throw Error("--voxel-size / --resolution auto: volumes are analysed on their own voxel grid (no resampling)");
+    if (!max_loops_given) options.max_loops = 200;
+    vo.field.margin = options.levelset.margin;
+    vo.view = view;
+    return cli::run_volume(input, outdir, options, vo, std::ref(progress));
+  }
+  if (volume_options)
+    throw Error("--iso, --inside, --label, --labels, --volume and --expect-genus apply to volumes (.nii, .nii.gz, .nrrd, .nhdr) only");
   AnalyzeResult r = analyze(input, options, std::ref(progress));
   auto t = std::chrono::steady_clock::now();
   write_report(r, options, outdir);
