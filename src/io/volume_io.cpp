@@ -110,32 +110,46 @@ VolumeImage read_nifti(const std::string& path, int volume) {
                      ") is not supported: give a scalar image (integer or float)");
   }
   v.integer_type = dt != DT_FLOAT32 && dt != DT_FLOAT64;
-  // The data: the whole file (a 4D image's other volumes too); nifti reads and checks its length.
-  std::shared_ptr<nifti_image> img(nifti_image_read(path.c_str(), 1), [](nifti_image* p) { if (p) nifti_image_free(p); });
-  if (!img || !img->data) fail(path, "the voxel data cannot be read (file truncated or compressed stream corrupt?)");
+  // The data, read through znzlib (nifti's own zlib layer) rather than nifti_image_read: niftilib quietly
+  // replaces NaN/Inf floats by 0, and a NaN must be refused, not analysed as 0. Only volume K is read.
   const std::size_t n3 = std::size_t(v.voxel_count());
-  const std::size_t off = n3 * std::size_t(v.volume);
+  const std::size_t bytes = n3 * std::size_t(hdr->nbyper);
+  std::vector<std::uint8_t> raw(bytes);
+  {
+    znzFile f = znzopen(hdr->iname, "rb", nifti_is_gzfile(hdr->iname));
+    if (znz_isnull(f)) fail(path, std::string("cannot open the voxel data file ") + hdr->iname);
+    const long long skip = (long long)hdr->iname_offset + (long long)bytes * v.volume;
+    const bool ok = znzseek(f, skip, SEEK_SET) >= 0 && znzread(raw.data(), 1, bytes, f) == bytes;
+    znzclose(f);
+    if (!ok)
+      fail(path, "the voxel data is shorter than dims x datatype promise (" + std::to_string(bytes) +
+                     " bytes at offset " + std::to_string(skip) + "): file truncated or compressed stream corrupt");
+  }
+  if (hdr->byteorder != nifti_short_order() && hdr->nbyper > 1)
+    nifti_swap_Nbytes(std::int64_t(n3), hdr->nbyper, raw.data());
   v.values.resize(n3);
-  const double slope = img->scl_slope, inter = img->scl_inter;
+  const double slope = hdr->scl_slope, inter = hdr->scl_inter;
   const bool scale = slope != 0 && std::isfinite(slope) && std::isfinite(inter) && !(slope == 1 && inter == 0);
-  auto convert = [&](auto* p) {
+  auto convert = [&](auto tag) {
+    using T = decltype(tag);
     for (std::size_t i = 0; i < n3; ++i) {
-      double x = double(p[off + i]);
-      v.values[i] = float(scale ? x * slope + inter : x);
+      T x;
+      std::memcpy(&x, &raw[i * sizeof(T)], sizeof(T));
+      v.values[i] = float(scale ? double(x) * slope + inter : double(x));
     }
   };
   switch (dt) {
-    case DT_UINT8: convert(static_cast<const std::uint8_t*>(img->data)); break;
-    case DT_INT8: convert(static_cast<const std::int8_t*>(img->data)); break;
-    case DT_INT16: convert(static_cast<const std::int16_t*>(img->data)); break;
-    case DT_UINT16: convert(static_cast<const std::uint16_t*>(img->data)); break;
-    case DT_INT32: convert(static_cast<const std::int32_t*>(img->data)); break;
-    case DT_UINT32: convert(static_cast<const std::uint32_t*>(img->data)); break;
-    case DT_FLOAT32: convert(static_cast<const float*>(img->data)); break;
-    case DT_FLOAT64: convert(static_cast<const double*>(img->data)); break;
+    case DT_UINT8: convert(std::uint8_t{}); break;
+    case DT_INT8: convert(std::int8_t{}); break;
+    case DT_INT16: convert(std::int16_t{}); break;
+    case DT_UINT16: convert(std::uint16_t{}); break;
+    case DT_INT32: convert(std::int32_t{}); break;
+    case DT_UINT32: convert(std::uint32_t{}); break;
+    case DT_FLOAT32: convert(float{}); break;
+    case DT_FLOAT64: convert(double{}); break;
   }
+  std::vector<std::uint8_t>().swap(raw);
   if (scale) v.integer_type = false;
-  img.reset();
   check_values(v);
 
   // NIfTI's world is RAS+ mm. sform first (what Slicer and ITK-SNAP show when it is set), then qform.
