@@ -217,6 +217,8 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   std::ifstream((d / "out" / "loops.json")) >> j;
   EXPECT_EQ(j["coordinates"]["convention"], "RAS");
   EXPECT_EQ(j["units"], "mm");
+  EXPECT_EQ(j["volume"]["dims"][0], 64);  // the volume's own fields, merged into loops.json
+  EXPECT_NEAR(j["volume"]["spacing_mm"][2].get<double>(), 1.5, 1e-5);
   Eigen::Matrix4d A = Eigen::Matrix4d::Identity();
   for (int q = 0; q < 3; ++q)
     for (int c2 = 0; c2 < 4; ++c2) A(q, c2) = in.affine[q][c2];

@@ -39,7 +39,7 @@ INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, or a med
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
-  --max-loops N|all         trace loops for the N most persistent chokes only (default 200 for volumes,
+  --max-loops N|all         trace loops for the N most persistent chokes only (default 20 for volumes,
                             all otherwise); the rest are counted
 Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD; distances in mm with
 the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD) on the input's grid too):
@@ -147,7 +147,7 @@ int run(std::vector<std::string> args) {
       throw Error("a volume needs exactly one of --iso T (scalar image), --label N or --labels all (label map)");
     if (options.levelset.voxel_size > 0 || options.resolution_auto)
       throw Error("--voxel-size / --resolution auto: volumes are analysed on their own voxel grid (no resampling)");
-    if (!max_loops_given) options.max_loops = 200;
+    if (!max_loops_given) options.max_loops = 20;
     vo.field.margin = options.levelset.margin;
     vo.view = view;
     return cli::run_volume(input, outdir, options, vo, std::ref(progress));

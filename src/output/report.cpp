@@ -110,8 +110,10 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
   j["strongest_filtered"] = {{"handle", filtered(r.chokes.strongest_filtered_handle, r.chokes.R_in)},
                              {"tunnel", filtered(r.chokes.strongest_filtered_tunnel, r.chokes.R_out)}};
   if (r.loops_omitted > 0) j["loops_omitted"] = r.loops_omitted;
-  if (!r.extra_json.empty())
-    for (auto& [k, v] : json::parse(r.extra_json).items()) j[k] = v;
+  if (!r.extra_json.empty()) {
+    const json extra = json::parse(r.extra_json);  // kept alive while its items are read
+    for (auto it = extra.begin(); it != extra.end(); ++it) j[it.key()] = it.value();
+  }
   j["warnings"] = r.warnings;
   json timings = json::object();
   for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;
