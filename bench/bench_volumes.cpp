@@ -166,6 +166,7 @@ int main(int argc, char** argv) {
     }
     int status = 0;
     waitpid(pid, &status, 0);
+    if (WIFSIGNALED(status)) std::printf("%-12s killed by signal %d\n", c.c_str(), WTERMSIG(status));
   }
   std::printf("(seconds; read = image reading / synthesis; field = signed distance on the padded lattice; loops\n"
               " traced for the --max-loops most persistent chokes; peak RSS of the case's own process)\n");

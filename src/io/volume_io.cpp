@@ -266,6 +266,16 @@ std::string label_volume_name(const VolumeImage& like, const std::string& stem) 
 
 void write_label_volume(const VolumeImage& like, const std::vector<std::int32_t>& labels, const std::string& path) {
   if (std::int64_t(labels.size()) != like.voxel_count()) throw std::logic_error("label volume size differs from the image's");
+  if (!like.header) {  // an image made in memory (tests, benchmarks): its dims and affine make the header
+    VolumeImage v;
+    v.dims = like.dims;
+    v.affine = like.affine;
+    v.convention = like.convention;
+    v.datatype = "int32";
+    v.values.assign(labels.begin(), labels.end());
+    write_scalar_volume(v, path);
+    return;
+  }
   if (like.format == "nrrd") {
     const Nrrd* in = static_cast<const Nrrd*>(like.header.get());
     std::shared_ptr<Nrrd> out(nrrdNew(), [](Nrrd* p) { nrrdNix(p); });  // nix: the data is ours
