@@ -99,7 +99,7 @@ VolumeField volume_to_levelset(const VolumeImage& image, const VolumeFieldOption
     return g_of(v);
   };
   const int gx = grid.dims[0], gy = grid.dims[1], gz = grid.dims[2];
-  std::vector<std::vector<detail::Site>> slice_sites(std::size_t(gz));  // per z slice, joined in order
+  std::vector<std::vector<detail::Site>> slice_sites(static_cast<std::size_t>(gz));  // per z slice, joined in order
   tbb::parallel_for(0, gz, [&](int k) {
     std::vector<detail::Site>& sites = slice_sites[std::size_t(k)];
     for (int j = 0; j < gy; ++j)
