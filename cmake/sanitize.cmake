@@ -5,15 +5,7 @@
 # Included from the top CMakeLists.txt, which then stops (no other targets in a sanitizer build).
 
 set(CHOKELOOPS_SANITIZE_FLAGS -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer)
-set(CHOKELOOPS_INPUT_SOURCES
-  ${PROJECT_SOURCE_DIR}/src/field/levelset.cpp
-  ${PROJECT_SOURCE_DIR}/src/field/levelset_edt.cpp
-  ${PROJECT_SOURCE_DIR}/src/field/levelset_repair.cpp
-  ${PROJECT_SOURCE_DIR}/src/io/mesh_io.cpp
-  ${PROJECT_SOURCE_DIR}/src/io/vdb_io.cpp)
-if(EXISTS ${PROJECT_SOURCE_DIR}/src/field/winding_number.cpp)
-  list(APPEND CHOKELOOPS_INPUT_SOURCES ${PROJECT_SOURCE_DIR}/src/field/winding_number.cpp)
-endif()
+file(GLOB CHOKELOOPS_INPUT_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/io/*.cpp ${PROJECT_SOURCE_DIR}/src/field/*.cpp)
 add_library(chokeloops_input STATIC ${CHOKELOOPS_INPUT_SOURCES})
 target_include_directories(chokeloops_input PUBLIC ${PROJECT_SOURCE_DIR}/include PRIVATE ${PROJECT_SOURCE_DIR}/src)
 target_compile_definitions(chokeloops_input PUBLIC CHOKELOOPS_VERSION="${PROJECT_VERSION}"

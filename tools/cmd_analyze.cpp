@@ -11,6 +11,7 @@
 #include "chokeloops/analyze.h"
 #include "chokeloops/analyze_molecule.h"
 #include "chokeloops/output/view.h"
+#include "analyze_volume_cli.h"
 #include "args.h"
 #include "command.h"
 
@@ -20,8 +21,9 @@ namespace {
 
 const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
 
-INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, or a molecule (.pdb .cif .ent
-.mmcif, optionally .gz; lengths in Å, default --voxel-size 0.25).
+INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, a molecule (.pdb .cif .ent .mmcif,
+optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (.nii .nii.gz .hdr .nrrd .nhdr)
+with one of --iso, --label, --labels all.
   -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
   --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
                             a closed input mesh's genus and components (up to 1024 or --max-memory)
@@ -42,6 +44,8 @@ INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, or a mol
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --quiet                   no progress on stderr
+  --max-loops N|all         trace loops for the N most persistent chokes only (default 20 for volumes,
+                            all otherwise); the rest are counted
 Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are written too):
   --model N                 model number (default 1)
   --chains A,B              keep only these chains (default all)
@@ -50,6 +54,14 @@ Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are wri
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
   --probe R                 probe radius for sas/ses, Å (default 1.4)
   --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
+Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD; distances in mm with
+the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD) on the input's grid too):
+  --iso T                   scalar image: inside where the stored value is >= T
+  --inside above|below      below: inside where the value is < T
+  --label N                 label map: the voxels equal to N (boundary halfway between voxels)
+  --labels all              one analysis per non-zero label into OUTDIR/label_N/, index in OUTDIR/labels.json
+  --volume K                the K-th volume (from 0) of a 4D image
+  --expect-genus G          list handle generators beyond the G most persistent as topology defects
 Exit codes: 0 success, 2 bad input, 3 out of resources, 4 internal error (a bug: please report it).
 )";
 
@@ -103,6 +115,8 @@ int run(std::vector<std::string> args) {
   std::string input, outdir, png;
   bool quiet = false, view = true;
   int threads = 0;
+  cli::VolumeCliOptions vo;
+  bool max_loops_given = false;
   cli::Args in("analyze", std::move(args));
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
@@ -154,6 +168,22 @@ int run(std::vector<std::string> args) {
     else if (in.is("--no-slide")) options.loops.slide = false;
     else if (in.is("--no-check")) options.check_generators = false;
     else if (in.is("-q", "--quiet")) quiet = true;
+    else if (in.is("--iso")) { vo.field.has_iso = true; vo.field.iso = in.number(); }
+    else if (in.is("--inside")) {
+      std::string v = in.value();
+      if (v != "above" && v != "below") throw Error("--inside must be above or below");
+      vo.field.inside_below = v == "below";
+    } else if (in.is("--label")) { vo.field.has_label = true; vo.field.label = double(in.integer(-2147483647L, 2147483647L)); }
+    else if (in.is("--labels")) {
+      if (in.value() != "all") throw Error("--labels takes 'all' (or use --label N)");
+      vo.all_labels = true;
+    } else if (in.is("--volume")) vo.volume = int(in.integer(0, 1 << 20));
+    else if (in.is("--expect-genus")) vo.expect_genus = int(in.integer(0, 1 << 30));
+    else if (in.is("--max-loops")) {
+      max_loops_given = true;
+      if (in.peek() == "all") { in.value(); options.max_loops = -1; }
+      else options.max_loops = int(in.integer(0, 1 << 30));
+    }
     else in.positional(input, "input");
   }
   if (input.empty()) throw Error("no input given (usage: chokeloops analyze INPUT -o OUTDIR)");
@@ -203,6 +233,23 @@ int run(std::vector<std::string> args) {
   }
   if (!molecule_flags.empty())
     throw Error(molecule_flags.front() + " applies to molecules only (.pdb/.cif input; see chokeloops analyze --help)");
+  const bool volume_input = is_volume_path(input);
+  const bool volume_options = vo.field.has_iso || vo.field.has_label || vo.all_labels || vo.volume >= 0 ||
+                              vo.expect_genus >= 0 || vo.field.inside_below;
+  if (volume_input) {
+    if (vo.all_labels && (vo.field.has_label || vo.field.has_iso))
+      throw Error("--labels all analyses every label: give it without --label / --iso");
+    if (!vo.all_labels && vo.field.has_label == vo.field.has_iso)
+      throw Error("a volume needs exactly one of --iso T (scalar image), --label N or --labels all (label map)");
+    if (options.levelset.voxel_size > 0 || options.resolution_auto)
+      throw Error("--voxel-size / --resolution auto: volumes are analysed on their own voxel grid (no resampling)");
+    if (!max_loops_given) options.max_loops = 20;
+    vo.field.margin = options.levelset.margin;
+    vo.view = view;
+    return cli::run_volume(input, outdir, options, vo, std::ref(progress));
+  }
+  if (volume_options)
+    throw Error("--iso, --inside, --label, --labels, --volume and --expect-genus apply to volumes (.nii, .nii.gz, .nrrd, .nhdr) only");
   AnalyzeResult r = analyze(input, options, std::ref(progress));
   auto t = std::chrono::steady_clock::now();
   write_report(r, options, outdir);

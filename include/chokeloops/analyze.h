@@ -7,6 +7,7 @@
 
 #include "chokeloops/topology/chokes.h"
 #include "chokeloops/field/levelset.h"
+#include "chokeloops/field/volume_field.h"
 #include "chokeloops/loops/membranes.h"
 #include "chokeloops/topology/persistence.h"
 #include "chokeloops/surface/surface.h"
@@ -19,6 +20,9 @@ struct AnalyzeOptions {
   ChokeParameters chokes;
   LoopOptions loops;
   bool check_generators = true;  // verify each generator loop is non-contractible (CGAL); drop it if not
+  // Loops are traced for at most this many chokes (-1: all). Past it, the chokes are ranked by their
+  // pair's persistence (death - birth, most persistent first) and the rest are counted, not traced.
+  int max_loops = -1;
 };
 
 struct AnalyzeResult {
@@ -34,6 +38,9 @@ struct AnalyzeResult {
   int resolution = 0;                     // voxels along the longest side actually used (0: voxel size given)
   std::vector<std::string> warnings;
   std::map<std::string, double> timings_ms;  // per stage, and "total"
+  int loops_omitted = 0;                  // chokes past AnalyzeOptions::max_loops (not traced)
+  WorldFrame frame;                       // volumes: grid frame -> image world (applied when writing)
+  std::string extra_json;                 // a JSON object whose fields are added to loops.json
 };
 
 // Runs every stage on a file (mesh or .vdb). Throws Error (2 bad input, 3 resources).

@@ -30,10 +30,11 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// One FH pass over a line of n samples: f (squared distance so far, kInf = none), feature id.
-// Scratch: v (int n), z (double n+1). Writes results back into f / id.
+// One FH pass over a line of n samples: f (squared distance so far, kInf = none), feature id; w = the
+// squared spacing along the line in units of grid.voxel_size (1 on isotropic grids, where every product
+// by it is exact: same results as without it). Scratch: v (int n), z (double n+1). Writes back into f / id.
 void envelope_line(int n, float* f, std::int32_t* id, std::vector<int>& v, std::vector<double>& z,
-                   std::vector<float>& fo, std::vector<std::int32_t>& io) {
+                   std::vector<float>& fo, std::vector<std::int32_t>& io, double w = 1.0) {
   int k = -1;
   double s = 0;
   for (int q = 0; q < n; ++q) {
@@ -47,7 +48,7 @@ void envelope_line(int n, float* f, std::int32_t* id, std::vector<int>& v, std::
     }
     while (true) {  // z[0] = -inf stops this at k = 0
       const int p = v[k];
-      s = ((double(f[q]) + double(q) * q) - (double(f[p]) + double(p) * p)) / (2.0 * (q - p));
+      s = ((double(f[q]) + w * (double(q) * q)) - (double(f[p]) + w * (double(p) * p))) / (2.0 * w * (q - p));
       if (s <= z[k]) {
         --k;
         continue;
@@ -64,7 +65,7 @@ void envelope_line(int n, float* f, std::int32_t* id, std::vector<int>& v, std::
   for (int q = 0; q < n; ++q) {
     while (z[j + 1] < q) ++j;
     const int p = v[j];
-    fo[q] = float(double(q - p) * (q - p) + f[p]);
+    fo[q] = float(w * (double(q - p) * (q - p)) + f[p]);
     io[q] = id[p];
   }
   std::copy(fo.begin(), fo.begin() + n, f);
@@ -81,6 +82,11 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const std::size_t N = std::size_t(grid.vertex_count());
   if (sites.empty()) return;
+  // Squared spacing per axis in units of voxel_size (anisotropic grids; exactly 1 on isotropic ones).
+  const double wx = (grid.h(0) / grid.voxel_size) * (grid.h(0) / grid.voxel_size);
+  const double wy = (grid.h(1) / grid.voxel_size) * (grid.h(1) / grid.voxel_size);
+  const double wz = (grid.h(2) / grid.voxel_size) * (grid.h(2) / grid.voxel_size);
+  const float fwx = float(wx), fwy = float(wy), fwz = float(wz);
   std::vector<float> D(N, kInf);
   std::vector<std::int32_t> F(N, -1);
   for (std::size_t s = 0; s < sites.size(); ++s) {
@@ -95,19 +101,19 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
     std::vector<std::int32_t> io(nx);
     for (int line = r.begin(); line != r.end(); ++line) {
       const std::size_t base = std::size_t(line) * nx;
-      envelope_line(nx, &D[base], &F[base], v, z, fo, io);
+      envelope_line(nx, &D[base], &F[base], v, z, fo, io, wx);
     }
   });
   auto d2 = [&](int i, int j, int k, std::int32_t s) {  // squared distance to site s's surface point
     const float* p = sites[std::size_t(s)].p;
     const float dx = float(i) - p[0], dy = float(j) - p[1], dz = float(k) - p[2];
-    return dx * dx + dy * dy + dz * dz;
+    return dx * dx * fwx + dy * dy * fwy + dz * dz * fwz;
   };
   // pass y and z: gather/scatter strided lines, a few at a time for cache. The z pass (last) also turns
   // each line into squared distances to the chosen sites' surface points and relaxes it (see below)
   // while it is in cache: that saves two sweeps of the whole grid.
   auto strided = [&](int n, std::size_t stride, int lines_outer, int lines_inner, std::size_t outer_stride,
-                     bool last) {
+                     bool last, double w) {
     constexpr int B = 16;  // neighbouring lines gathered together: contiguous reads of B values
     tbb::parallel_for(tbb::blocked_range<int>(0, lines_outer), [&](const tbb::blocked_range<int>& r) {
       std::vector<int> v(n + 1);
@@ -128,7 +134,7 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
           for (int b = 0; b < nb; ++b) {
             float* f = &fl[std::size_t(b) * n];
             std::int32_t* id = &il[std::size_t(b) * n];
-            envelope_line(n, f, id, v, z, fo, io);
+            envelope_line(n, f, id, v, z, fo, io, w);
             if (!last) continue;
             const int i = i0 + b, j = o;  // z line: k = q
             for (int q = 0; q < n; ++q) f[q] = id[q] < 0 ? kInf : d2(i, j, q, id[q]);
@@ -154,9 +160,9 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
     });
   };
   // y lines: index = i + nx*(j + ny*k); for fixed k (outer) and i (inner), stride nx
-  strided(ny, std::size_t(nx), nz, nx, std::size_t(nx) * ny, false);
+  strided(ny, std::size_t(nx), nz, nx, std::size_t(nx) * ny, false, wy);
   // z lines: for fixed j (outer, stride nx) and i (inner), stride nx*ny
-  strided(nz, std::size_t(nx) * ny, ny, nx, std::size_t(nx), true);
+  strided(nz, std::size_t(nx) * ny, ny, nx, std::size_t(nx), true, wz);
 
   // Refinement: the nearest site (by vertex position) is not always the one with the nearest surface
   // point; let every vertex try its axial neighbours' choices, in both directions along each axis

@@ -167,7 +167,7 @@ class LoopTracer {
     std::array<int, 3> i0;
     std::array<double, 3> t;
     for (int a = 0; a < 3; ++a) {
-      double u = (p[a] - g_.origin[a]) / g_.voxel_size;
+      double u = (p[a] - g_.origin[a]) / g_.h(a);
       u = std::min(std::max(u, 0.0), double(g_.dims[a] - 1) - 1e-9);
       i0[a] = std::min(int(u), g_.dims[a] - 2);
       t[a] = u - i0[a];
@@ -508,8 +508,17 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
                               const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology) {
   LoopTracer tracer(grid, surface, adjacency, topology);
   std::vector<Loop> loops(chokes.size());
-  tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) { loops[i] = tracer.trace(chokes[i], options); },
-                    tbb::simple_partitioner());
+  // One choke whose loop cannot be made (e.g. a membrane interface spanning two surface components of a
+  // raw segmentation) is reported without a loop; it does not stop the others.
+  tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) {
+    try {
+      loops[i] = tracer.trace(chokes[i], options);
+    } catch (const Error& e) {
+      loops[i] = Loop{};
+      loops[i].choke = chokes[i];
+      loops[i].note = std::string("no loop: ") + e.what();
+    }
+  }, tbb::simple_partitioner());
   return loops;
 }
 

@@ -13,10 +13,20 @@ nlohmann::json point(const std::array<double, 3>& p) { return nlohmann::json::ar
 }  // namespace
 
 std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
+  // Volumes: every position is written in the image's world (mm, its convention), not the grid's frame.
+  const WorldFrame& wf = r.frame;
+  auto pos = [&](const std::array<double, 3>& p) { return wf.set ? wf.apply(p) : p; };
   using nlohmann::json;
   json j;
   j["input"] = std::filesystem::path(r.input).filename().string();
-  j["units"] = "input";
+  j["units"] = wf.set ? "mm" : "input";
+  if (wf.set) {
+    json m = json::array();
+    for (int row = 0; row < 3; ++row)
+      m.push_back({wf.linear[row][0], wf.linear[row][1], wf.linear[row][2], wf.offset[row]});
+    j["coordinates"] = {{"convention", wf.convention}, {"frame", "world"}, {"source", wf.source},
+                        {"grid_to_world", m}};
+  }
   j["voxel_size"] = r.grid.voxel_size;
   j["grid"] = {{"dims", {r.grid.dims[0], r.grid.dims[1], r.grid.dims[2]}},
                {"origin", {r.grid.origin[0], r.grid.origin[1], r.grid.origin[2]}}};
@@ -46,7 +56,7 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
     const Loop& l = r.loops[i];
     const Choke& c = l.choke;
     json pts = json::array();
-    for (auto& p : l.points) pts.push_back(point(p));
+    for (auto& p : l.points) pts.push_back(point(pos(p)));
     auto sc = cx.coords(c.saddle);
     loops.push_back({{"id", i},
                      {"side", to_string(c.side)},
@@ -56,9 +66,9 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
                      {"birth", c.birth},
                      {"death", c.death},
                      {"length", l.length},
-                     {"choke_point", point(c.point)},
-                     {"centroid", point(l.centroid)},
-                     {"normal", point(l.normal)},
+                     {"choke_point", point(pos(c.point))},
+                     {"centroid", point(pos(l.centroid))},
+                     {"normal", point(wf.set ? wf.rotate(l.normal) : l.normal)},
                      {"radius_min", l.radius_min},
                      {"radius_mean", l.radius_mean},
                      {"raw_length", l.raw_length},
@@ -78,6 +88,11 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
   };
   j["strongest_filtered"] = {{"handle", filtered(r.chokes.strongest_filtered_handle, r.chokes.R_in)},
                              {"tunnel", filtered(r.chokes.strongest_filtered_tunnel, r.chokes.R_out)}};
+  if (r.loops_omitted > 0) j["loops_omitted"] = r.loops_omitted;
+  if (!r.extra_json.empty()) {
+    const json extra = json::parse(r.extra_json);  // kept alive while its items are read
+    for (auto it = extra.begin(); it != extra.end(); ++it) j[it.key()] = it.value();
+  }
   j["warnings"] = r.warnings;
   json timings = json::object();
   for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;
@@ -90,10 +105,21 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
   std::filesystem::create_directories(outdir, ec);
   if (ec || !std::filesystem::is_directory(outdir))
     throw Error("cannot create output directory '" + outdir + "': " + ec.message());
-  write_ply(r.surface, outdir + "/surface.ply");
+  const WorldFrame& wf = r.frame;
+  if (wf.set) {
+    SurfaceMesh world = r.surface;
+    for (auto& v : world.vertices) v = wf.apply(v);
+    write_ply(world, outdir + "/surface.ply");
+  } else {
+    write_ply(r.surface, outdir + "/surface.ply");
+  }
   std::vector<Polyline3> polylines;
   for (const Loop& l : r.loops)
-    if (l.found) polylines.push_back(l.points);
+    if (l.found) {
+      polylines.push_back(l.points);
+      if (wf.set)
+        for (auto& p : polylines.back()) p = wf.apply(p);
+    }
   write_loops_ply(polylines, outdir + "/loops.ply");
   write_loops_obj(polylines, outdir + "/loops.obj");
   std::ofstream out(outdir + "/loops.json");

@@ -69,6 +69,14 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   t = Clock::now();
   stage("chokes", 0);
   r.chokes = find_chokes(r.grid, r.diagram, options.chokes);
+  if (options.max_loops >= 0 && int(r.chokes.chokes.size()) > options.max_loops) {
+    // Tens of thousands of generators (raw probability maps): trace the most persistent first.
+    std::stable_sort(r.chokes.chokes.begin(), r.chokes.chokes.end(), [](const Choke& a, const Choke& b) {
+      return a.death - a.birth > b.death - b.birth;
+    });
+    r.loops_omitted = int(r.chokes.chokes.size()) - options.max_loops;
+    r.chokes.chokes.resize(std::size_t(options.max_loops));
+  }
   r.timings_ms["chokes"] = ms_since(t);
 
   t = Clock::now();

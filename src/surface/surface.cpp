@@ -154,7 +154,7 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
   mesh.vertices.resize(size_t(layer_vertices[nz]));
   mesh.vertex_edge.resize(size_t(layer_vertices[nz]));
   mesh.faces.resize(size_t(layer_faces[nz]));
-  const double h = grid.voxel_size;
+  const double hx = grid.h(0), hy = grid.h(1), hz = grid.h(2);
   const double eps = 1e-3;
 
   // Pass 2: vertex numbering and positions.
@@ -172,9 +172,9 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
             double fa = f[v], fb = f[v + off[m]];
             double t = fa / (fa - fb);
             t = std::min(std::max(t, eps), 1 - eps);
-            mesh.vertices[size_t(next)] = {grid.origin[0] + h * (i + t * (m & 1)),
-                                           grid.origin[1] + h * (j + t * (m >> 1 & 1)),
-                                           grid.origin[2] + h * (k + t * (m >> 2 & 1))};
+            mesh.vertices[size_t(next)] = {grid.origin[0] + hx * (i + t * (m & 1)),
+                                           grid.origin[1] + hy * (j + t * (m >> 1 & 1)),
+                                           grid.origin[2] + hz * (k + t * (m >> 2 & 1))};
             mesh.vertex_edge[size_t(next)] = 7 * v + (m - 1);
             ++next;
           }

@@ -64,14 +64,17 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
     Choke c;
     c.birth = b;
     c.death = d;
-    if (p.dim == 1 && b < 0 && d > 0) {
+    // The solid is {phi <= 0}, as the surface extraction takes it (a vertex at exactly 0 is inside): a pair
+    // alive at 0 is born at or below it and dies above it. Fields with exact zeros (an image whose voxels
+    // sit exactly at the iso value) made `b < 0` here miss handles the surface has.
+    if (p.dim == 1 && b <= 0 && d > 0) {
       // One handle and one tunnel of the genus. As in the paper (section 3.2), a generator's persistence is
       // how long the side it cuts lives on: the handle's until the deepest core (R_in) is reached, the
       // tunnel's until the box is filled (R_out). Reported, never filtered.
       Choke h = c;
       h.side = Side::Handle;
       h.kind = Kind::Generator;
-      h.depth = -b;
+      h.depth = b < 0 ? -b : 0.0;
       h.persistence = out.R_in - h.depth;
       h.simplex_dim = 1;
       h.simplex = p.birth_simplex;
@@ -92,10 +95,10 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
       if (params.tunnels) out.chokes.push_back(t);
       out.handle_diagram.push_back({h.depth, h.persistence});
       out.tunnel_diagram.push_back({t.depth, t.persistence});
-    } else if (p.dim == 0 && d < 0) {
+    } else if (p.dim == 0 && d <= 0) {
       c.side = Side::Handle;
       c.kind = Kind::Choke;
-      c.depth = -d;
+      c.depth = d < 0 ? -d : 0.0;
       c.persistence = d - b;
       c.simplex_dim = 1;
       c.simplex = p.death_simplex;
@@ -120,7 +123,7 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
         if (c.persistence >= out.min_persistence_tunnel) out.chokes.push_back(c);
         else keep_stronger(out.strongest_filtered_tunnel, c);
       }
-    } else if (p.dim == 0 && b <= 0 && d >= 0) {
+    } else if (p.dim == 0 && b <= 0 && d > 0) {
       ++out.gaps;
     } else if (p.dim == 2 && b <= 0 && d > 0) {
       ++out.sealed_cavities;
