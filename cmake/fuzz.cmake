@@ -1,5 +1,7 @@
-# CHOKELOOPS_FUZZ=ON (with CXX=clang++): libFuzzer harnesses for every input reader, fuzz/fuzz_*.cpp, over
-# the input stage (src/io, src/field) built with -fsanitize=fuzzer-no-link,address,undefined. Run them
+# CHOKELOOPS_FUZZ=ON (with CXX=clang++): libFuzzer harnesses fuzz/fuzz_*.cpp for every input reader (meshes,
+# .vdb, PDB/mmCIF, NIfTI/NRRD), over the input stage (src/io, src/field) built with
+# -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh. Included from the top
+# CMakeLists.txt, which then stops (no other targets).
 # with scripts/fuzz.sh. Included from the top CMakeLists.txt, which then stops (no other targets).
 
 if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
@@ -27,3 +29,7 @@ foreach(ext obj ply off stl)
   chokeloops_add_fuzzer(fuzz_${ext} ${PROJECT_SOURCE_DIR}/fuzz/fuzz_mesh_reader.cpp CHOKELOOPS_FUZZ_EXT=".${ext}")
 endforeach()
 chokeloops_add_fuzzer(fuzz_vdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_vdb_reader.cpp)
+chokeloops_add_fuzzer(fuzz_pdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.cpp CHOKELOOPS_FUZZ_EXT=".pdb")
+chokeloops_add_fuzzer(fuzz_cif ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.cpp CHOKELOOPS_FUZZ_EXT=".cif")
+chokeloops_add_fuzzer(fuzz_nii ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".nii")
+chokeloops_add_fuzzer(fuzz_nrrd ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".nrrd")
