@@ -2,7 +2,6 @@
 # .vdb, PDB/mmCIF, NIfTI/NRRD), over the input stage (src/io, src/field) built with
 # -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh. Included from the top
 # CMakeLists.txt, which then stops (no other targets).
-# with scripts/fuzz.sh. Included from the top CMakeLists.txt, which then stops (no other targets).
 
 if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
   message(FATAL_ERROR "CHOKELOOPS_FUZZ needs clang (libFuzzer): configure with CXX=clang++")
