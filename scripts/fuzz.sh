@@ -24,8 +24,8 @@ for name in "${NAMES[@]}"; do
   log="$BUILD/fuzz_$name.log"
   ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -max_len=65536 -rss_limit_mb=2048 \
     -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
-  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
-  [ -n "$runs" ] || runs=$(grep -o '^#[0-9]*' "$log" | tail -1 | tr -d '#')
+  runs=$(grep -ao 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || true)
+  [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   found=$(find "$findings" -type f | wc -l)
   if [ "$found" -eq 0 ]; then
     echo "fuzz $name: ${runs:-0} executions, 0 crashes"
