@@ -8,6 +8,7 @@
 
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/topology.h"
+#include "loop_checks.h"
 
 namespace chokeloops {
 
@@ -103,23 +104,10 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   if (any_generator) topology = std::make_unique<SurfaceTopology>(r.surface, adjacency);
   r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops, topology.get());
   r.timings_ms["loops"] = ms_since(t);
-  // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks
-  // that it did; a loop that became contractible is reported as missing.
   t = Clock::now();
-  if (topology && options.check_generators) {
-    for (auto& l : r.loops)
-      if (l.found && l.choke.kind == Kind::Generator && topology->contractible_fast(l.edge_path)) {
-        l.found = false;
-        l.note = "the generator's loop is contractible on the surface after shortening; no valid generator loop";
-        l.points.clear();
-        l.edge_path.clear();
-      }
-  }
+  if (topology && options.check_generators) drop_contractible_generators(r.loops, *topology);
   r.timings_ms["check"] = ms_since(t);
-  int missing = 0;
-  for (auto& l : r.loops) missing += !l.found;
-  if (missing)
-    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
+  warn_about_missing_loops(r.loops, r.warnings);
   stage("done", 1);
   r.timings_ms["total"] = ms_since(t_start);
   return r;
@@ -227,6 +215,26 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   r.warnings = warnings;
   r.timings_ms["total"] = ms_since(t0);
   return r;
+}
+
+void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& topology, const std::vector<bool>* skip) {
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    Loop& l = loops[i];
+    if ((skip && (*skip)[i]) || !l.found || l.choke.kind != Kind::Generator) continue;
+    if (topology.contractible_fast(l.edge_path)) {
+      l.found = false;
+      l.note = "the generator's loop is contractible on the surface after shortening; no valid generator loop";
+      l.points.clear();
+      l.edge_path.clear();
+    }
+  }
+}
+
+void warn_about_missing_loops(const std::vector<Loop>& loops, std::vector<std::string>& warnings) {
+  int missing = 0;
+  for (auto& l : loops) missing += !l.found;
+  if (missing)
+    warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
 }
 
 }  // namespace chokeloops

@@ -9,6 +9,7 @@
 
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/topology.h"
+#include "loop_checks.h"
 
 namespace chokeloops {
 
@@ -98,22 +99,9 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   for (std::size_t k = 0; k < traced.size(); ++k) r.loops[rest_index[k]] = std::move(traced[k]);
   r.timings_ms["loops"] = ms(t);
   t = Clock::now();
-  if (topology && analyze.check_generators)
-    for (std::size_t i = 0; i < r.loops.size(); ++i) {
-      Loop& l = r.loops[i];
-      if (done[i] || !l.found || l.choke.kind != Kind::Generator) continue;
-      if (topology->contractible_fast(l.edge_path)) {
-        l.found = false;
-        l.note = "the generator's loop is contractible on the surface after shortening; no valid generator loop";
-        l.points.clear();
-        l.edge_path.clear();
-      }
-    }
+  if (topology && analyze.check_generators) drop_contractible_generators(r.loops, *topology, &done);
   r.timings_ms["check"] = ms(t);
-  int missing = 0;
-  for (auto& l : r.loops) missing += !l.found;
-  if (missing)
-    r.warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
+  warn_about_missing_loops(r.loops, r.warnings);
   r.warnings.insert(r.warnings.begin(), m.molecule.warnings.begin(), m.molecule.warnings.end());
   stage("done", 1);
   r.timings_ms["total"] = ms(t0);
