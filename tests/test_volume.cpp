@@ -9,7 +9,9 @@
 #include <iterator>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -19,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "chokeloops/analyze_volume.h"
+#include "chokeloops/io/volume_io.h"
 
 using namespace chokeloops;
 namespace fs = std::filesystem;
@@ -388,4 +391,25 @@ TEST(VolumeMni, GreyMatterMapSurfaceGenusEqualsHandleGenerators) {
   // most persistent first
   for (std::size_t i = 1; i < r.loops.size(); ++i)
     EXPECT_GE(r.loops[i - 1].choke.death - r.loops[i - 1].choke.birth, r.loops[i].choke.death - r.loops[i].choke.birth);
+}
+
+// Found by fuzzing: a NIfTI header promising far more voxels than its file holds was allocated before the read
+// failed. It is refused from the file's size, plain or gzipped, before any allocation.
+TEST(VolumeBadInput, HeaderPromisingMoreThanTheFileHoldsIsRefusedBeforeAllocating) {
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/nii/box.nii", std::ios::binary);
+  std::string nii((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(nii.size(), 472u);
+  const std::int16_t dims[4] = {3, 30000, 30000, 30000};  // 2.7e13 bytes of uint8
+  std::memcpy(&nii[40], dims, sizeof dims);
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("chokeloops_huge_" + std::to_string(::getpid()) + ".nii")).string();
+  std::ofstream(path, std::ios::binary) << nii;
+  try {
+    chokeloops::read_volume(path);
+    ADD_FAILURE() << "a 30000^3 header on a 472-byte file was accepted";
+  } catch (const chokeloops::Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find("shorter than"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }

@@ -11,6 +11,7 @@
 #include <nifti/nifti2_io.h>
 #include <teem/nrrd.h>
 
+#include "chokeloops/field/levelset.h"
 #include "chokeloops/grid.h"
 
 namespace chokeloops {
@@ -114,6 +115,19 @@ VolumeImage read_nifti(const std::string& path, int volume) {
   // replaces NaN/Inf floats by 0, and a NaN must be refused, not analysed as 0. Only volume K is read.
   const std::size_t n3 = std::size_t(v.voxel_count());
   const std::size_t bytes = n3 * std::size_t(hdr->nbyper);
+  // Guard before allocating (found by fuzzing): a header may promise far more data than the file holds.
+  // A gzip stream inflates at most 1032-fold, so a compressed file bounds the data it can hold as well.
+  {
+    std::error_code ec;
+    const std::uintmax_t file_bytes = std::filesystem::file_size(hdr->iname, ec);
+    const long double need = (long double)hdr->iname_offset + (long double)bytes * (v.volume + 1);
+    const long double can_hold = ec ? need : (long double)file_bytes * (nifti_is_gzfile(hdr->iname) ? 1032 : 1);
+    if (need > can_hold)
+      fail(path, "the voxel data is shorter than dims x datatype promise (" + std::to_string(bytes) +
+                     " bytes per volume; the file has " + std::to_string(file_bytes) + ")");
+    if (bytes > default_max_memory())
+      throw Error(path + ": one volume needs " + std::to_string(bytes >> 20) + " MiB, more than the memory allowed", 3);
+  }
   std::vector<std::uint8_t> raw(bytes);
   {
     znzFile f = znzopen(hdr->iname, "rb", nifti_is_gzfile(hdr->iname));
