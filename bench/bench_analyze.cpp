@@ -1,7 +1,7 @@
 // Table 1 of the paper, on this engine: for each of the paper's models found in data (and the
 // tangle cube made from its implicit equation), the median over --runs runs of every stage of
 // `analyze`, with surface size, grid size, genus g, additional loops k, d_max, delta_min and peak RSS.
-// Each run is its own child process: timings as the CLI sees them, peak RSS per model.
+// Each run is its own child process (analyze_child.h): timings as the CLI sees them, peak RSS per model.
 //
 //   bench_analyze [--runs 5] [--resolution 256] [--data data] [--only NAME]
 #include <sys/resource.h>
@@ -21,86 +21,22 @@
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/analyze.h"
 #include "chokeloops/io/vdb_io.h"
+#include "analyze_child.h"
 
 using namespace chokeloops;
 
 struct Model { std::string name, file, d_max, min_persistence; int resolution = 0; };  // 0: --resolution
 
-static double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
-// One analyze per child process, as a user runs the CLI once per model (repeated runs in one process pay
-// for re-faulting memory the allocator gave back, ~20% slower); peak RSS is the largest child's.
-struct RunResult {
-  std::map<std::string, double> timings_ms;
-  long long surface_vertices = 0;
-  int dims[3] = {0, 0, 0};
-  int g = 0, k = 0;
-  double peak_mb = 0;
-  std::string error;
-};
-
-static RunResult run_once_in_child(const Model& m, int resolution) {
-  int fd[2];
-  if (pipe(fd) != 0) return {{}, 0, {0, 0, 0}, 0, 0, 0, "pipe failed"};
-  pid_t pid = fork();
-  if (pid == 0) {
-    close(fd[0]);
-    FILE* out = fdopen(fd[1], "w");
-    try {
-      AnalyzeOptions o;
-      o.levelset.resolution = m.resolution > 0 ? m.resolution : resolution;
-      o.chokes.d_max = Threshold::parse(m.d_max);
-      o.chokes.min_persistence = Threshold::parse(m.min_persistence);
-      AnalyzeResult r = analyze(m.file, o);
-      int k = 0;
-      for (auto& l : r.loops) k += l.choke.kind == Kind::Choke;
-      struct rusage ru;
-      getrusage(RUSAGE_SELF, &ru);
-      std::fprintf(out, "ok %lld %d %d %d %d %d %.1f\n", (long long)r.surface_stats.vertices, r.grid.dims[0],
-                   r.grid.dims[1], r.grid.dims[2], r.chokes.handle_generators, k, ru.ru_maxrss / 1024.0);
-      for (auto& kv : r.timings_ms) std::fprintf(out, "%s\t%.3f\n", kv.first.c_str(), kv.second);
-    } catch (const std::exception& e) {
-      std::fprintf(out, "error %s\n", e.what());
-    }
-    std::fclose(out);
-    _exit(0);
-  }
-  close(fd[1]);
-  RunResult res;
-  FILE* in = fdopen(fd[0], "r");
-  char line[4096];
-  if (std::fgets(line, sizeof line, in)) {
-    if (std::strncmp(line, "ok ", 3) == 0) {
-      std::sscanf(line + 3, "%lld %d %d %d %d %d %lf", &res.surface_vertices, &res.dims[0], &res.dims[1],
-                  &res.dims[2], &res.g, &res.k, &res.peak_mb);
-      while (std::fgets(line, sizeof line, in)) {
-        char* tab = std::strchr(line, '\t');
-        if (!tab) continue;
-        *tab = 0;
-        res.timings_ms[line] = std::atof(tab + 1);
-      }
-    } else {
-      res.error = line;
-      if (!res.error.empty() && res.error.back() == '\n') res.error.pop_back();
-    }
-  } else {
-    res.error = "child produced no result";
-  }
-  std::fclose(in);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return res;
-}
-
 static void run_model(const Model& m, int runs, int resolution) {
   std::map<std::string, std::vector<double>> t;
-  RunResult last;
+  bench::ChildRun last;
   double peak = 0;
+  AnalyzeOptions o;
+  o.levelset.resolution = m.resolution > 0 ? m.resolution : resolution;
+  o.chokes.d_max = Threshold::parse(m.d_max);
+  o.chokes.min_persistence = Threshold::parse(m.min_persistence);
   for (int r = 0; r < runs; ++r) {
-    last = run_once_in_child(m, resolution);
+    last = bench::analyze_in_child(m.file, o);
     if (!last.error.empty()) {
       std::printf("| %-10s | %s |\n", m.name.c_str(), last.error.c_str());
       return;
@@ -110,8 +46,8 @@ static void run_model(const Model& m, int runs, int resolution) {
   }
   std::printf("| %-10s | %9lld | %4dx%4dx%4d | %7.0f | %7.0f | %6.0f | %6.0f | %6.0f | %7.0f | %2d | %2d | %5s | %5s | %6.0f |\n",
               m.name.c_str(), last.surface_vertices, last.dims[0], last.dims[1], last.dims[2],
-              median(t["levelset"]), median(t["persistence"]), median(t["chokes"]), median(t["surface"]),
-              median(t["loops"]), median(t["total"]), last.g, last.k, m.d_max.c_str(), m.min_persistence.c_str(), peak);
+              bench::median(t["levelset"]), bench::median(t["persistence"]), bench::median(t["chokes"]),
+              bench::median(t["surface"]), bench::median(t["loops"]), bench::median(t["total"]), last.g, last.k, m.d_max.c_str(), m.min_persistence.c_str(), peak);
   std::fflush(stdout);
 }
 

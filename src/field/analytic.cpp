@@ -167,4 +167,87 @@ Sdf hollow_ball_through_hole(double outer, double inner, double hole_r, Vec3 c) 
   };
 }
 
+namespace {
+struct Hole { int axis; double u, v, r; };  // a line along `axis` through (u, v) in the other two coordinates
+
+// Distance between the axes of two holes (parallel: in their common plane; crossing: along the third axis).
+double axis_distance(const Hole& a, const Hole& b) {
+  if (a.axis == b.axis) return std::hypot(a.u - b.u, a.v - b.v);
+  // Coordinates (u, v) are the two axes other than `axis`, in increasing order; the third axis, not
+  // along either hole, is where both lines have a fixed coordinate.
+  const int third = 3 - a.axis - b.axis;
+  auto coordinate = [](const Hole& h, int axis) { return axis == (h.axis == 0 ? 1 : 0) ? h.u : h.v; };
+  return std::abs(coordinate(a, third) - coordinate(b, third));
+}
+}  // namespace
+
+Sdf pierced_block(int holes, std::uint64_t seed, double r_min, double r_max) {
+  const Vec3 lo{0.1, 0.15, 0.2}, hi{0.9, 0.85, 0.8};
+  std::vector<Hole> placed;
+  Rng rng{mix(seed)};
+  // Four sizes, so that depths spread; rejection keeps a gap of a hole radius between any two holes.
+  for (int tries = 0; int(placed.size()) < holes && tries < 200000; ++tries) {
+    Hole h;
+    h.axis = int(rng.next() * 3) % 3;
+    h.r = r_min + (r_max - r_min) * double(int(rng.next() * 4) % 4) / 3.0;
+    const int ua = h.axis == 0 ? 1 : 0, va = h.axis == 2 ? 1 : 2;
+    h.u = rng.uniform(lo[ua] + 2 * h.r, hi[ua] - 2 * h.r);
+    h.v = rng.uniform(lo[va] + 2 * h.r, hi[va] - 2 * h.r);
+    bool fits = true;
+    for (const Hole& o : placed) fits &= axis_distance(h, o) > 2 * (h.r + o.r);
+    if (fits) placed.push_back(h);
+  }
+  if (int(placed.size()) < holes) throw std::invalid_argument("pierced_block: holes do not fit in the block");
+  return [=](double x, double y, double z) {
+    const double p[3] = {x, y, z};
+    double box_out = 0, box_in = -1e300;
+    for (int a = 0; a < 3; ++a) {
+      const double d = std::max(lo[a] - p[a], p[a] - hi[a]);
+      box_in = std::max(box_in, d);
+      box_out += std::max(d, 0.0) * std::max(d, 0.0);
+    }
+    double f = box_in > 0 ? std::sqrt(box_out) : box_in;
+    for (const Hole& h : placed) {
+      const int ua = h.axis == 0 ? 1 : 0, va = h.axis == 2 ? 1 : 2;
+      f = std::max(f, h.r - std::hypot(p[ua] - h.u, p[va] - h.v));
+    }
+    return f;
+  };
+}
+
+Sdf ball_and_stick_cage(std::array<int, 3> n, double ball_r, double neck_r) {
+  const int longest = std::max({n[0], n[1], n[2]});
+  if (std::min({n[0], n[1], n[2]}) < 1 || longest < 2) throw std::invalid_argument("ball_and_stick_cage: need 2 balls or more");
+  const double step = 0.6 / (longest - 1);
+  Vec3 first;
+  for (int a = 0; a < 3; ++a) first[a] = 0.5 - 0.5 * step * (n[a] - 1);
+  return [=](double x, double y, double z) {
+    const double p[3] = {x, y, z};
+    // Only the balls and sticks of the nearest lattice cell can be nearest (beyond it a ball covers the
+    // end of every stick): clamp to that cell.
+    std::array<int, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::min(std::max(int(std::floor((p[a] - first[a]) / step)), 0), std::max(n[a] - 2, 0));
+    double f = 1e300;
+    for (int k = c[2]; k <= std::min(c[2] + 1, n[2] - 1); ++k)
+      for (int j = c[1]; j <= std::min(c[1] + 1, n[1] - 1); ++j)
+        for (int i = c[0]; i <= std::min(c[0] + 1, n[0] - 1); ++i) {
+          const int at[3] = {i, j, k};
+          double d0[3];
+          for (int a = 0; a < 3; ++a) d0[a] = p[a] - (first[a] + step * at[a]);
+          f = std::min(f, length3(d0[0], d0[1], d0[2]) - ball_r);
+          // The stick toward +x, +y, +z from this ball: radius ball_r at its ends, neck_r at its middle.
+          for (int a = 0; a < 3; ++a) {
+            if (at[a] + 1 > n[a] - 1) continue;
+            double d[3] = {d0[0], d0[1], d0[2]};
+            const double t = std::min(std::max(d[a] / step, 0.0), 1.0);
+            d[a] -= t * step;
+            const double s = 2 * t - 1;
+            f = std::min(f, length3(d[0], d[1], d[2]) - (neck_r + (ball_r - neck_r) * s * s));
+          }
+        }
+    return f;
+  };
+}
+
 }  // namespace chokeloops::analytic

@@ -114,7 +114,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   {
     std::vector<int> starts{s};
     const auto& cv = sh.band.cut_vertices;
-    const int samples = 16;
+    const int samples = std::max(0, opt.cut_samples);
     for (int i = 0; i < samples && !cv.empty(); ++i) starts.push_back(cv[size_t(i) * cv.size() / samples]);
     std::sort(starts.begin() + 1, starts.end());
     starts.erase(std::unique(starts.begin() + 1, starts.end()), starts.end());

@@ -171,14 +171,28 @@ void Shortener::build_arcs() {
 }
 
 std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
-  const int NL = 7, L0 = 3;  // sheets -3..3
-  const int n = int(band.global.size());
-  std::vector<double> d(size_t(n) * NL, std::numeric_limits<double>::infinity());
-  std::vector<int> from(size_t(n) * NL, -1);
+  // Sheets -3..3 of the cover. The searches of one band reuse their arrays (one set per thread): only the
+  // nodes a search touched are reset, so a search costs what it explores, not the band's size times 7.
+  constexpr int NL = 7, L0 = 3;
+  struct Scratch {
+    std::vector<double> d;
+    std::vector<int> from, touched;
+  };
+  static thread_local Scratch scratch;
+  const std::size_t nodes = band.global.size() * std::size_t(NL);
+  auto& d = scratch.d;
+  auto& from = scratch.from;
+  auto& touched = scratch.touched;
+  if (d.size() < nodes) {
+    d.assign(nodes, std::numeric_limits<double>::infinity());
+    from.assign(nodes, -1);
+  }
+  touched.clear();
   using QE = std::pair<double, int>;
   std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
-  int src = s * NL + L0, dst = s * NL + L0 + band.winding;
+  const int src = s * NL + L0, dst = s * NL + L0 + band.winding;
   d[src] = 0;
+  touched.push_back(src);
   q.push({0, src});
   while (!q.empty()) {
     auto [dv, node] = q.top();
@@ -191,15 +205,22 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
       if (nl < 0 || nl >= NL) continue;
       int w = arcs[i].to * NL + nl;
       double nd = dv + arcs[i].len;
-      if (nd < d[w]) d[w] = nd, from[w] = node, q.push({nd, w});
+      if (nd < d[w]) {
+        if (std::isinf(d[w])) touched.push_back(w);
+        d[w] = nd, from[w] = node, q.push({nd, w});
+      }
     }
   }
-  if (std::isinf(d[dst])) { length = std::numeric_limits<double>::infinity(); return {}; }
-  length = d[dst];
   std::vector<int> path;
-  for (int node = dst; node != src; node = from[node]) path.push_back(band.global[node / NL]);
-  std::reverse(path.begin(), path.end());  // starts after s, ends with s
-  std::rotate(path.begin(), path.end() - 1, path.end());
+  if (std::isinf(d[dst])) {
+    length = std::numeric_limits<double>::infinity();
+  } else {
+    length = d[dst];
+    for (int node = dst; node != src; node = from[node]) path.push_back(band.global[node / NL]);
+    std::reverse(path.begin(), path.end());  // starts after s, ends with s
+    std::rotate(path.begin(), path.end() - 1, path.end());
+  }
+  for (int w : touched) d[w] = std::numeric_limits<double>::infinity(), from[w] = -1;
   return path;
 }
 

@@ -67,6 +67,19 @@ Sdf varying_torus(double R = 0.5, double r0 = 0.15, double amp = 0.06, Vec3 c = 
 // that its gradient is of order 1 near the surface (|grad f| is 15-45 on the zero set in X units).
 Sdf tangle_cube(Vec3 c = kCentre);
 
+// A block pierced by `holes` straight round holes (cylinders along x, y or z, radii in [r_min, r_max],
+// placed by a seeded rejection sampling so that no two holes meet and every hole is at least its radius
+// from the block's edges): genus `holes`, one handle and one tunnel generator per hole. The block spans
+// [0.1, 0.9] x [0.15, 0.85] x [0.2, 0.8]; sample it on the unit cube. Exact outside the block, approximate
+// (max of exact distances) inside it.
+Sdf pierced_block(int holes, std::uint64_t seed, double r_min = 0.012, double r_max = 0.035);
+
+// A ball-and-stick cage: balls of radius `ball_r` on an n[0] x n[1] x n[2] lattice (step 0.6 / (largest
+// n - 1), centred in the unit cube), each pair of lattice neighbours joined by a stick whose radius narrows
+// from `ball_r` at its ends to `neck_r` at its middle (a neck on every stick). Genus = sticks - balls + 1.
+// Approximate SDF.
+Sdf ball_and_stick_cage(std::array<int, 3> n = {3, 3, 3}, double ball_r = 0.07, double neck_r = 0.035);
+
 // Smooth random field: sum of `count` Gaussian bumps of random sign, centre in the unit cube and width
 // in [0.05, 0.2], amplitude in [0.5, 1], seeded (same seed -> same function on every platform).
 Sdf random_gaussians(int count, std::uint64_t seed);

@@ -36,6 +36,7 @@ struct ShortenOptions {
   double max_move = 0;     // > 0: no point may end farther than this (along mesh edges) from the input loop
   int max_rings = 12;      // band width in edge rings around the input loop
   int max_swaps = 5000;    // limit on strip side swaps in step 3
+  int cut_samples = 16;    // step 2 also starts from this many vertices spread along the band's cut
 };
 
 struct ShortenResult {

@@ -1,0 +1,116 @@
+// The loop stage at scale: models with many loops, and the loop stage's time as a ratio of the level-set
+// stage's time in the same run (robust to the shared machine's speed swings), with the time per loop.
+//   pierced block  a block with 100 round through holes of four sizes (analytic::pierced_block), as a mesh
+//   cage           a 4x3x3 ball-and-stick cage with a neck on every stick (analytic::ball_and_stick_cage)
+//   fertility, neptune   the manifest meshes (Table 1 parameters)
+// The analytic models are sampled and their marching surface written as a PLY mesh first, so that every
+// model goes through `analyze` as a user's mesh does. Each run is a child process (analyze_child.h).
+//
+//   bench_loops [--runs 3] [--threads N] [--only NAME] [--data data]
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "analyze_child.h"
+#include "chokeloops/field/analytic.h"
+#include "chokeloops/output/mesh_write.h"
+#include "chokeloops/surface/surface.h"
+
+using namespace chokeloops;
+
+namespace {
+
+struct Model {
+  std::string name, file;
+  int resolution;
+  std::string d_max, min_persistence;  // empty: the CLI's defaults
+};
+
+// Samples `sdf` on the unit cube at n^3 and writes its zero surface as a mesh, in a child process (TBB's
+// workers do not survive fork(): a parent that had started them would give every later child one thread).
+void write_model_mesh(const Sdf& sdf, int n, const std::string& path) {
+  if (pid_t pid = fork(); pid == 0) {
+    write_ply(extract_zero_surface(sample_field({n, n, n}, sdf)), path);
+    _exit(0);
+  } else {
+    int status = 0;
+    waitpid(pid, &status, 0);
+  }
+}
+
+void run_model(const Model& m, int runs, int threads) {
+  AnalyzeOptions o;
+  o.levelset.resolution = m.resolution;
+  if (!m.d_max.empty()) o.chokes.d_max = Threshold::parse(m.d_max);
+  if (!m.min_persistence.empty()) o.chokes.min_persistence = Threshold::parse(m.min_persistence);
+  std::map<std::string, std::vector<double>> t;
+  std::vector<double> ratio, per_loop, loop_median;
+  bench::ChildRun last;
+  double peak = 0;
+  for (int r = 0; r < runs; ++r) {
+    last = bench::analyze_in_child(m.file, o, threads);
+    if (!last.error.empty()) {
+      std::printf("| %-13s | %s |\n", m.name.c_str(), last.error.c_str());
+      return;
+    }
+    for (auto& kv : last.timings_ms) t[kv.first].push_back(kv.second);
+    ratio.push_back(last.timings_ms["loops"] / last.timings_ms["levelset"]);
+    per_loop.push_back(last.loops ? last.timings_ms["loops"] / last.loops : 0);
+    loop_median.push_back(last.loop_median_ms);
+    peak = std::max(peak, last.peak_mb);
+  }
+  std::printf("| %-13s | %4d | %9lld | %3d | %3d | %4d/%-4d | %8.0f | %8.0f | %7.0f | %5.2f | %7.2f | %7.2f | %6.0f |\n",
+              m.name.c_str(), m.resolution, last.surface_vertices, last.g, last.k, last.loops_found, last.loops,
+              bench::median(t["levelset"]), bench::median(t["loops"]), bench::median(t["check"]),
+              bench::median(ratio), bench::median(per_loop), bench::median(loop_median), peak);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int runs = 3, threads = 0;
+  std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/data", only;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
+    else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+    else if (a == "--data" && i + 1 < argc) data = argv[++i];
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else { std::fprintf(stderr, "usage: bench_loops [--runs N] [--threads N] [--only NAME] [--data DIR]\n"); return 2; }
+  }
+  const auto tmp = std::filesystem::temp_directory_path();
+  const std::string block = (tmp / "chokeloops_pierced_block.ply").string();
+  const std::string cage = (tmp / "chokeloops_cage.ply").string();
+  if (only.empty() || only == "pierced-block") write_model_mesh(analytic::pierced_block(100, 7), 192, block);
+  if (only.empty() || only == "cage") write_model_mesh(analytic::ball_and_stick_cage({4, 3, 3}), 128, cage);
+  std::vector<Model> models = {
+      {"pierced-block", block, 256, "", ""},
+      {"cage", cage, 160, "", ""},
+      {"fertility", data + "/meshes/fertility_vmas.off", 256, "50%", "10%"},
+      {"neptune", data + "/meshes/neptune_vmas.off", 472, "50%", "10%"},
+  };
+  std::printf("median of %d runs, %s threads; times in ms; ratio = loop stage / level-set stage of the same run;\n"
+              "ms/loop = loop stage / loops traced; loop med = median over the loops of each one's own wall time (loops\n"
+              "run in parallel); check = the contractibility check of the generators after the loop stage\n\n",
+              runs, threads > 0 ? std::to_string(threads).c_str() : "all");
+  std::printf("| model         | res  | surf #v   | g   | k   | loops     | levelset | loops    | check   | ratio | ms/loop | loop med | RSS MB |\n");
+  std::printf("|---------------|------|-----------|-----|-----|-----------|----------|----------|---------|-------|---------|----------|--------|\n");
+  std::fflush(stdout);
+  for (const Model& m : models) {
+    if (!only.empty() && m.name != only) continue;
+    if (!std::filesystem::exists(m.file)) { std::printf("| %-13s | missing %s |\n", m.name.c_str(), m.file.c_str()); continue; }
+    run_model(m, runs, threads);
+  }
+  if (!std::getenv("CHOKELOOPS_KEEP_MODELS")) {  // set it to profile `chokeloops analyze` on them
+    std::filesystem::remove(block);
+    std::filesystem::remove(cage);
+  }
+  return 0;
+}
