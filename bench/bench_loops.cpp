@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
   const auto tmp = std::filesystem::temp_directory_path();
   const std::string block = (tmp / "chokeloops_pierced_block.ply").string();
   const std::string cage = (tmp / "chokeloops_cage.ply").string();
-  if (only.empty() || only == "pierced-block") write_model_mesh(analytic::pierced_block(100, 7), 192, block);
+  if (only.empty() || only == "pierced-block") write_model_mesh(analytic::pierced_block(100, 7), 256, block);
   if (only.empty() || only == "cage") write_model_mesh(analytic::ball_and_stick_cage({4, 3, 3}), 128, cage);
   std::vector<Model> models = {
       {"pierced-block", block, 256, "", ""},

@@ -185,7 +185,7 @@ Sdf pierced_block(int holes, std::uint64_t seed, double r_min, double r_max) {
   const Vec3 lo{0.1, 0.15, 0.2}, hi{0.9, 0.85, 0.8};
   std::vector<Hole> placed;
   Rng rng{mix(seed)};
-  // Four sizes, so that depths spread; rejection keeps a gap of a hole radius between any two holes.
+  // Four sizes, so that depths spread.
   for (int tries = 0; int(placed.size()) < holes && tries < 200000; ++tries) {
     Hole h;
     h.axis = int(rng.next() * 3) % 3;
@@ -194,7 +194,7 @@ Sdf pierced_block(int holes, std::uint64_t seed, double r_min, double r_max) {
     h.u = rng.uniform(lo[ua] + 2 * h.r, hi[ua] - 2 * h.r);
     h.v = rng.uniform(lo[va] + 2 * h.r, hi[va] - 2 * h.r);
     bool fits = true;
-    for (const Hole& o : placed) fits &= axis_distance(h, o) > 2 * (h.r + o.r);
+    for (const Hole& o : placed) fits &= axis_distance(h, o) > 1.5 * (h.r + o.r);
     if (fits) placed.push_back(h);
   }
   if (int(placed.size()) < holes) throw std::invalid_argument("pierced_block: holes do not fit in the block");

@@ -42,6 +42,23 @@ namespace chokeloops {
 
 namespace {
 
+// Per-vertex (or per-face) marks over the whole surface that a thread reuses from one flood to the next:
+// cleared by bumping a stamp, so that a small membrane on a surface of millions of vertices pays for the
+// vertices it labels, not for the surface.
+template <class T>
+struct StampedMarks {
+  std::vector<T> value;
+  std::vector<std::uint32_t> stamp;
+  std::uint32_t now = 0;
+  void reset(std::size_t n) {
+    if (stamp.size() < n) stamp.assign(n, 0), value.assign(n, T{});
+    if (++now == 0) std::fill(stamp.begin(), stamp.end(), 0), now = 1;
+  }
+  bool has(std::size_t i) const { return stamp[i] == now; }
+  T get(std::size_t i) const { return has(i) ? value[i] : T{}; }
+  void set(std::size_t i, T v) { stamp[i] = now, value[i] = v; }
+};
+
 // GrowContractible: curves closed near the choke, but (for a generator) each is contractible on the surface.
 enum class Attempt { Found, Grow, GrowContractible, Shrink };
 
@@ -277,7 +294,9 @@ class LoopTracer {
     };
     const std::size_t last_bucket = bucket_of(0.0f) + 1;
     if (last_bucket >= (std::size_t(1) << (32 - kLevelShift))) throw Error("membrane flood: choke too deep for the level queue");
-    std::vector<std::uint32_t> cell(lz * n[2]);
+    // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
+    static thread_local std::vector<std::uint32_t> cell;
+    cell.resize(lz * n[2]);
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j) {
         const float* row = f_ + base + gy * j + gz * k;
@@ -391,7 +410,8 @@ class LoopTracer {
 
     // Label the surface vertices on the crossing edges by their region end.
     // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.
-    std::vector<std::int8_t> vertex_label(S_.vertices.size(), 0);
+    static thread_local StampedMarks<std::int8_t> vertex_label;
+    vertex_label.reset(S_.vertices.size());
     std::vector<int> labelled;
     for (const Node& x : shore) {
       std::array<int, 3> gp{lo[0] + x.p[0], lo[1] + x.p[1], lo[2] + x.p[2]};
@@ -401,19 +421,24 @@ class LoopTracer {
         if (region(u)) continue;
         int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
         if (sv >= 0) {
-          if (vertex_label[sv] == 0) labelled.push_back(sv);
-          vertex_label[sv] = std::int8_t(zone(x.li));
+          if (vertex_label.get(sv) == 0) labelled.push_back(sv);
+          vertex_label.set(sv, std::int8_t(zone(x.li)));
         }
       }
     }
 
     // Interface segments on faces whose vertices carry both labels; chain them into curves.
-    std::vector<char> face_seen(S_.faces.size(), 0);
+    // Only faces whose corners carry both labels hold interface segments: a big box labels a million
+    // vertices, and sorting all their faces cost more than the flood.
     std::vector<int> sorted_faces;
     for (int v : labelled)
-      for (int q = A_.vf_start[v]; q < A_.vf_start[v + 1]; ++q)
-        if (!face_seen[A_.vf[q]]) face_seen[A_.vf[q]] = 1, sorted_faces.push_back(A_.vf[q]);
+      for (int q = A_.vf_start[v]; q < A_.vf_start[v + 1]; ++q) {
+        const auto& F = S_.faces[A_.vf[q]];
+        const std::int8_t a = vertex_label.get(F[0]), b = vertex_label.get(F[1]), c = vertex_label.get(F[2]);
+        if (a && b && c && !(a == b && b == c)) sorted_faces.push_back(A_.vf[q]);
+      }
     std::sort(sorted_faces.begin(), sorted_faces.end());
+    sorted_faces.erase(std::unique(sorted_faces.begin(), sorted_faces.end()), sorted_faces.end());
     auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
     std::vector<std::array<std::int64_t, 2>> segments;
     for (int fi : sorted_faces) {
@@ -421,7 +446,7 @@ class LoopTracer {
       std::array<std::int8_t, 3> l;
       bool unknown = false;
       for (int q = 0; q < 3; ++q) {
-        l[q] = vertex_label[F[q]];
+        l[q] = vertex_label.get(F[q]);
         unknown |= l[q] == 0;
       }
       if (unknown || (l[0] == l[1] && l[1] == l[2])) continue;

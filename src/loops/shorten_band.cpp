@@ -82,15 +82,15 @@ bool Shortener::build_band(const std::vector<int>& region, const std::unordered_
   // Connected (face flood).
   {
     std::vector<int> stack{b.faces[0]};
-    std::vector<char> seen(mesh.faces.size(), 0);
-    seen[b.faces[0]] = 1;
+    std::unordered_set<int> seen{b.faces[0]};  // band faces only: the band is small, the mesh may be huge
+    seen.reserve(b.faces.size());
     size_t reached = 1;
     while (!stack.empty()) {
       int f = stack.back();
       stack.pop_back();
       for (int k = 0; k < 3; ++k) {
         int t = adj.twin[3 * f + k];
-        if (t >= 0 && face_in(t / 3) && !seen[t / 3]) seen[t / 3] = 1, ++reached, stack.push_back(t / 3);
+        if (t >= 0 && face_in(t / 3) && seen.insert(t / 3).second) ++reached, stack.push_back(t / 3);
       }
     }
     if (reached != b.faces.size()) return false;

@@ -4,6 +4,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace chokeloops {
@@ -20,6 +21,52 @@ int MeshAdjacency::halfedge(const SurfaceMesh& m, int a, int b) const {
 bool MeshAdjacency::has_edge(int a, int b) const {
   return std::binary_search(vv.begin() + vv_start[a], vv.begin() + vv_start[a + 1], b);
 }
+
+namespace {
+double edge_length(const SurfaceMesh& m, int a, int b) {
+  const auto &p = m.vertices[a], &q = m.vertices[b];
+  return std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+}
+
+// Cells about twice the mean edge long (at most ~2 cells a vertex, so that a sparse mesh in a big box does
+// not allocate a huge empty grid); vertices in order within each cell, so that ties resolve the same way.
+void build_vertex_cells(const SurfaceMesh& mesh, MeshAdjacency& A) {
+  const size_t nv = mesh.vertices.size(), nf = mesh.faces.size();
+  if (nv == 0 || nf == 0) return;
+  double sum = 0;
+  const size_t stride = std::max<size_t>(1, nf / 4096);
+  size_t sampled = 0;
+  for (size_t f = 0; f < nf; f += stride, ++sampled) sum += edge_length(mesh, mesh.faces[f][0], mesh.faces[f][1]);
+  A.mean_edge = sum / double(sampled);
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& p : mesh.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  double cell = std::max(2 * A.mean_edge, 1e-12);
+  for (;;) {
+    double cells = 1;
+    for (int a = 0; a < 3; ++a) cells *= std::floor((hi[a] - lo[a]) / cell) + 1;
+    if (cells <= 2.0 * double(nv) + 8) break;
+    cell *= 1.5;
+  }
+  A.cell_origin = lo;
+  A.cell_size = cell;
+  for (int a = 0; a < 3; ++a) A.cell_dims[a] = long(std::floor((hi[a] - lo[a]) / cell)) + 1;
+  const long ncells = A.cell_dims[0] * A.cell_dims[1] * A.cell_dims[2];
+  std::vector<int> cell_of(nv);
+  A.cell_start.assign(size_t(ncells) + 1, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    std::array<long, 3> c;
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::min(A.cell_dims[a] - 1, long((mesh.vertices[v][a] - lo[a]) / cell));
+    cell_of[v] = int(c[0] + A.cell_dims[0] * (c[1] + A.cell_dims[1] * c[2]));
+    ++A.cell_start[size_t(cell_of[v]) + 1];
+  }
+  for (long c = 0; c < ncells; ++c) A.cell_start[c + 1] += A.cell_start[c];
+  A.cell_vertex.resize(nv);
+  std::vector<int> fill(A.cell_start.begin(), A.cell_start.end() - 1);
+  for (size_t v = 0; v < nv; ++v) A.cell_vertex[fill[cell_of[v]]++] = int(v);
+}
+}  // namespace
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
   MeshAdjacency A;
@@ -74,6 +121,7 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
     for (size_t f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) A.vf[fill[mesh.faces[f][k]]++] = int(f);
   }
+  build_vertex_cells(mesh, A);
   return A;
 }
 

@@ -16,6 +16,7 @@
 #include <unordered_set>
 
 #include "chokeloops/surface/mesh_adjacency.h"
+#include "homology_basis.h"
 
 namespace chokeloops {
 
@@ -47,6 +48,13 @@ struct SurfaceTopology::Impl {
     std::unordered_map<int, SM::Vertex_index> local;
   };
   std::map<int, Component> comps;
+  std::once_flag basis_once;
+  std::unique_ptr<HomologyBasis> basis;  // built on the first homology query
+
+  const HomologyBasis& homology() {
+    std::call_once(basis_once, [&] { basis = std::make_unique<HomologyBasis>(mesh, adj, face_label, closed); });
+    return *basis;
+  }
 
   Impl(const SurfaceMesh& m, const MeshAdjacency* a) : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
     components = face_components(m, face_label);
@@ -142,7 +150,9 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
   const auto& adj = impl_->adj;
   const int c = impl_->vertex_label[loop[0]];
   if (c < 0 || !impl_->closed[c]) return contractible(loop);
-  if (!loop_is_simple(loop)) return null_homologous(loop) && contractible(loop);
+  // Not null in homology: essential, in time proportional to the loop (a generator's usual answer).
+  if (!impl_->homology().null_homologous(loop)) return false;
+  if (!loop_is_simple(loop)) return contractible(loop);
   auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
   std::unordered_set<std::uint64_t> cut;
   std::vector<char> on_loop(mesh.vertices.size(), 0);  // spares most edges the hash look-up
@@ -191,40 +201,9 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
 
 bool SurfaceTopology::null_homologous(const std::vector<int>& loop) {
   impl_->check(loop);
-  const auto& mesh = impl_->mesh;
-  const auto& adj = impl_->adj;
   const int c = impl_->vertex_label[loop[0]];
   if (c < 0 || !impl_->closed[c]) return contractible(loop);
-  if (loop.size() < 3) return true;
-  auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
-  std::unordered_map<std::uint64_t, char> parity;
-  std::vector<char> on_loop(mesh.vertices.size(), 0);
-  for (size_t i = 0; i < loop.size(); ++i) {
-    parity[key(loop[i], loop[(i + 1) % loop.size()])] ^= 1;
-    on_loop[loop[i]] = 1;
-  }
-  int h0 = adj.halfedge(mesh, loop[0], loop[1]);
-  if (h0 < 0) h0 = adj.halfedge(mesh, loop[1], loop[0]);  // the loop runs against the faces' orientation
-  if (h0 < 0) return contractible(loop);
-  std::vector<signed char> colour(mesh.faces.size(), -1);
-  std::vector<int> queue{MeshAdjacency::face(h0)};
-  colour[queue[0]] = 0;
-  for (std::size_t q = 0; q < queue.size(); ++q) {
-    int f = queue[q];
-    for (int k = 0; k < 3; ++k) {
-      int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
-      char flip = 0;
-      if (on_loop[a] && on_loop[b]) {
-        auto it = parity.find(key(a, b));
-        if (it != parity.end()) flip = it->second;
-      }
-      int g = MeshAdjacency::face(adj.twin[3 * f + k]);
-      signed char want = static_cast<signed char>(colour[f] ^ flip);
-      if (colour[g] < 0) { colour[g] = want; queue.push_back(g); }
-      else if (colour[g] != want) return false;
-    }
-  }
-  return true;
+  return impl_->homology().null_homologous(loop);
 }
 
 bool SurfaceTopology::separates(const std::vector<int>& loop) {
@@ -305,6 +284,9 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
                                             int component) {
   if (polyline.empty()) throw Error("polyline is empty");
   if (mesh.faces.empty()) throw Error("surface is empty");
+  MeshAdjacency own;
+  if (!adj) own = build_adjacency(mesh);
+  const MeshAdjacency& A = adj ? *adj : own;
   std::vector<int> vlabel;
   if (component >= 0) {
     std::vector<int> fl;
@@ -313,121 +295,56 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
     for (size_t f = 0; f < mesh.faces.size(); ++f)
       for (int k = 0; k < 3; ++k) vlabel[mesh.faces[f][k]] = fl[f];
   }
-  // Local region: the polyline's bounding box grown by a margin.
-  double edge = 0;
-  size_t stride = std::max<size_t>(1, mesh.faces.size() / 4096), sampled = 0;
-  for (size_t f = 0; f < mesh.faces.size(); f += stride, ++sampled)
-    edge += dist(mesh.vertices[mesh.faces[f][0]], mesh.vertices[mesh.faces[f][1]]);
-  edge /= double(sampled);
+  auto accept = [&](int v) { return component < 0 || vlabel[v] == component; };
+  // Everything below touches only vertices near the polyline (the adjacency's vertex cells, searches that
+  // stop at the next point), so that snapping a loop costs what the loop's neighbourhood holds.
+  const double edge = A.mean_edge;
   double seg = 0;
   for (size_t i = 0; i < polyline.size(); ++i) seg = std::max(seg, dist(polyline[i], polyline[(i + 1) % polyline.size()]));
-  double margin = 4 * std::max(edge, seg) + 4 * edge;
-  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (auto& p : polyline)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d] - margin), hi[d] = std::max(hi[d], p[d] + margin);
-  auto in_box = [&](const std::array<double, 3>& p) {
-    for (int d = 0; d < 3; ++d)
-      if (p[d] < lo[d] || p[d] > hi[d]) return false;
-    return true;
-  };
-  std::vector<int> local(mesh.vertices.size(), -1), global;
-  for (size_t v = 0; v < mesh.vertices.size(); ++v)
-    if (in_box(mesh.vertices[v]) && (component < 0 || vlabel[v] == component)) {
-      local[v] = int(global.size());
-      global.push_back(int(v));
-    }
-  if (global.empty()) throw Error("no surface vertex near the polyline");
-  // Local adjacency.
-  std::vector<std::vector<int>> nb(global.size());
-  if (adj) {
-    for (size_t i = 0; i < global.size(); ++i)
-      for (int j = adj->vv_start[global[i]]; j < adj->vv_start[global[i] + 1]; ++j)
-        if (local[adj->vv[j]] >= 0) nb[i].push_back(local[adj->vv[j]]);
-  } else {
-    for (auto& t : mesh.faces)
-      for (int k = 0; k < 3; ++k) {
-        int a = local[t[k]], b = local[t[(k + 1) % 3]];
-        if (a >= 0 && b >= 0) nb[a].push_back(b), nb[b].push_back(a);
-      }
-  }
-  for (auto& n : nb) {
-    std::sort(n.begin(), n.end());
-    n.erase(std::unique(n.begin(), n.end()), n.end());
-  }
-  // Nearest vertex per point (spatial hash over the local vertices).
-  double cell = 2 * edge;
-  auto cell_of = [&](const std::array<double, 3>& p) {
-    return std::array<long, 3>{long(std::floor((p[0] - lo[0]) / cell)), long(std::floor((p[1] - lo[1]) / cell)),
-                               long(std::floor((p[2] - lo[2]) / cell))};
-  };
-  auto hkey = [](long x, long y, long z) { return (std::uint64_t(x) * 73856093u) ^ (std::uint64_t(y) * 19349663u) ^ (std::uint64_t(z) * 83492791u); };
-  std::unordered_multimap<std::uint64_t, int> hash;
-  hash.reserve(global.size() * 2);
-  for (size_t i = 0; i < global.size(); ++i) {
-    auto c = cell_of(mesh.vertices[global[i]]);
-    hash.emplace(hkey(c[0], c[1], c[2]), int(i));
-  }
-  auto nearest = [&](const std::array<double, 3>& p) {
-    auto c = cell_of(p);
-    int best = -1;
-    double bd = 1e300;
-    const int rmax = int(margin / cell) + 2;
-    for (int r = 0; r <= rmax; ++r) {
-      for (long x = c[0] - r; x <= c[0] + r; ++x)
-        for (long y = c[1] - r; y <= c[1] + r; ++y)
-          for (long z = c[2] - r; z <= c[2] + r; ++z) {
-            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r) continue;
-            auto range = hash.equal_range(hkey(x, y, z));
-            for (auto it = range.first; it != range.second; ++it) {
-              double d = dist(p, mesh.vertices[global[it->second]]);
-              if (d < bd) bd = d, best = it->second;
-            }
-          }
-      if (best >= 0 && bd < r * cell) break;  // every unvisited cell is farther than r*cell
-    }
-    return best;
-  };
+  const double margin = 4 * std::max(edge, seg) + 4 * edge;
   std::vector<int> snapped;
   for (auto& p : polyline) {
-    int v = nearest(p);
+    int v = A.nearest_vertex(mesh, p, margin, accept);
     if (v >= 0 && (snapped.empty() || snapped.back() != v)) snapped.push_back(v);
   }
   while (snapped.size() > 1 && snapped.back() == snapped.front()) snapped.pop_back();
   if (snapped.empty()) throw Error("no surface vertex near the polyline");
-  if (snapped.size() < 2) return {global[snapped[0]]};
-  // Join consecutive vertices by shortest edge paths.
-  std::vector<double> d(global.size(), std::numeric_limits<double>::infinity());
-  std::vector<int> from(global.size(), -1), touched;
+  if (snapped.size() < 2) return {snapped[0]};
+  // Join consecutive vertices by shortest edge paths: a search that gives up past a few margins (the two
+  // points are then not joined near the polyline).
+  struct State { double d; int from; };
+  std::unordered_map<int, State> state;
   std::vector<int> path;
   for (size_t i = 0; i < snapped.size(); ++i) {
-    int s = snapped[i], t = snapped[(i + 1) % snapped.size()];
-    for (int v : touched) d[v] = std::numeric_limits<double>::infinity(), from[v] = -1;
-    touched.clear();
+    const int s = snapped[i], t = snapped[(i + 1) % snapped.size()];
+    const double limit = 2 * dist(mesh.vertices[s], mesh.vertices[t]) + 4 * margin;
+    state.clear();
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
-    d[s] = 0;
-    touched.push_back(s);
+    state[s] = {0, -1};
     q.push({0, s});
+    bool reached = false;
     while (!q.empty()) {
       auto [dv, v] = q.top();
       q.pop();
-      if (dv > d[v]) continue;
-      if (v == t) break;
-      for (int w : nb[v]) {
-        double nd = dv + dist(mesh.vertices[global[v]], mesh.vertices[global[w]]);
-        if (nd < d[w]) {
-          if (std::isinf(d[w])) touched.push_back(w);
-          d[w] = nd, from[w] = v;
-          q.push({nd, w});
-        }
+      if (dv > state[v].d) continue;
+      if (v == t) { reached = true; break; }
+      if (dv > limit) break;
+      for (int j = A.vv_start[v]; j < A.vv_start[v + 1]; ++j) {
+        const int w = A.vv[j];
+        if (!accept(w)) continue;
+        const double nd = dv + dist(mesh.vertices[v], mesh.vertices[w]);
+        auto it = state.find(w);
+        if (it == state.end()) state.emplace(w, State{nd, v}), q.push({nd, w});
+        else if (nd < it->second.d) it->second = {nd, v}, q.push({nd, w});
       }
     }
-    if (std::isinf(d[t])) throw Error("polyline points are not connected on the surface");
+    if (!reached) throw Error("polyline points are not connected on the surface");
     std::vector<int> seg_path;
-    for (int v = t; v != s; v = from[v]) seg_path.push_back(v);
+    for (int v = t; v != s; v = state[v].from) seg_path.push_back(v);
     std::reverse(seg_path.begin(), seg_path.end());  // excludes s, ends with t
-    path.push_back(global[s]);
-    for (size_t k = 0; k + 1 < seg_path.size(); ++k) path.push_back(global[seg_path[k]]);
+    path.push_back(s);
+    for (size_t k = 0; k + 1 < seg_path.size(); ++k) path.push_back(seg_path[k]);
   }
   // Remove spurs a b a -> a and repeats, cyclically, until stable.
   bool changed = true;

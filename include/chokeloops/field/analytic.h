@@ -68,11 +68,11 @@ Sdf varying_torus(double R = 0.5, double r0 = 0.15, double amp = 0.06, Vec3 c = 
 Sdf tangle_cube(Vec3 c = kCentre);
 
 // A block pierced by `holes` straight round holes (cylinders along x, y or z, radii in [r_min, r_max],
-// placed by a seeded rejection sampling so that no two holes meet and every hole is at least its radius
-// from the block's edges): genus `holes`, one handle and one tunnel generator per hole. The block spans
-// [0.1, 0.9] x [0.15, 0.85] x [0.2, 0.8]; sample it on the unit cube. Exact outside the block, approximate
-// (max of exact distances) inside it.
-Sdf pierced_block(int holes, std::uint64_t seed, double r_min = 0.012, double r_max = 0.035);
+// placed by a seeded rejection sampling: the gap between two holes is at least half their radii's sum, and
+// every hole is at least its radius from the block's edges): genus `holes`, one handle and one tunnel
+// generator per hole. The block spans [0.1, 0.9] x [0.15, 0.85] x [0.2, 0.8]; sample it on the unit cube.
+// Exact outside the block, approximate (max of exact distances) inside it.
+Sdf pierced_block(int holes, std::uint64_t seed, double r_min = 0.01, double r_max = 0.03);
 
 // A ball-and-stick cage: balls of radius `ball_r` on an n[0] x n[1] x n[2] lattice (step 0.6 / (largest
 // n - 1), centred in the unit cube), each pair of lattice neighbours joined by a stick whose radius narrows

@@ -2,6 +2,8 @@
 // Half-edge style adjacency of a SurfaceMesh, built once and shared by the topology checks and the loop
 // shortening. Half-edge h = 3*f + k runs from faces[f][k] to faces[f][(k+1)%3]; twin[h] is the opposite
 // half-edge in the neighbouring face, or -1 on a boundary (or at a non-manifold edge).
+#include <algorithm>
+#include <array>
 #include <vector>
 
 #include "chokeloops/surface/surface.h"
@@ -12,6 +14,13 @@ struct MeshAdjacency {
   std::vector<int> twin;                 // size 3*faces
   std::vector<int> vf_start, vf;         // CSR: faces around each vertex (unordered)
   std::vector<int> vv_start, vv;         // CSR: neighbour vertices of each vertex (sorted)
+  // The vertices in a uniform grid of cells about twice the mean edge long (CSR over cells), so that a
+  // point's nearest vertex costs a few cells, not a scan of the mesh.
+  std::array<double, 3> cell_origin{0, 0, 0};
+  double cell_size = 0;
+  std::array<long, 3> cell_dims{0, 0, 0};
+  std::vector<int> cell_start, cell_vertex;
+  double mean_edge = 0;
 
   static int face(int h) { return h / 3; }
   static int next(int h) { return h - h % 3 + (h % 3 + 1) % 3; }
@@ -19,7 +28,41 @@ struct MeshAdjacency {
   // Half-edge a -> b inside some face, or -1 when no face has it.
   int halfedge(const SurfaceMesh& m, int a, int b) const;
   bool has_edge(int a, int b) const;
+  // The vertex nearest to p among those within `radius` of it for which accept(v) is true, or -1.
+  template <class Accept>
+  int nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius, Accept&& accept) const;
+  int nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius) const {
+    return nearest_vertex(m, p, radius, [](int) { return true; });
+  }
 };
+
+template <class Accept>
+int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius, Accept&& accept) const {
+  if (cell_size <= 0) return -1;
+  std::array<long, 3> lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(0L, long((p[a] - radius - cell_origin[a]) / cell_size));
+    hi[a] = std::min(cell_dims[a] - 1, long((p[a] + radius - cell_origin[a]) / cell_size));
+    if (p[a] + radius < cell_origin[a] || hi[a] < lo[a]) return -1;
+  }
+  int best = -1;
+  double best_d2 = radius * radius;
+  for (long z = lo[2]; z <= hi[2]; ++z)
+    for (long y = lo[1]; y <= hi[1]; ++y)
+      for (long x = lo[0]; x <= hi[0]; ++x) {
+        const long c = x + cell_dims[0] * (y + cell_dims[1] * z);
+        for (int i = cell_start[c]; i < cell_start[c + 1]; ++i) {
+          const int v = cell_vertex[i];
+          const auto& q = m.vertices[v];
+          const double d2 = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
+          if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && v < best)) {
+            if (!accept(v)) continue;
+            best_d2 = d2, best = v;
+          }
+        }
+      }
+  return best;
+}
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh);
 

@@ -27,18 +27,18 @@ class SurfaceTopology {
 
   // Null-homotopic on the surface (CGAL::Surface_mesh_topology::Curves_on_surface_topology).
   bool contractible(const std::vector<int>& loop);
-  // The same answer without CGAL's structure when it can: a simple loop on a closed manifold component is
-  // contractible exactly when it bounds a disk, i.e. cutting along it separates the component and one side
-  // has Euler characteristic 1. Two face floods, one from each side of the loop and advanced in turn, decide
-  // it in time proportional to the smaller side (a separating loop) or to the part swept before they meet
-  // (a non-separating one): milliseconds where building CGAL's structure over a large surface takes
-  // seconds. A loop that is not simple is answered by null_homologous() when that shows it essential;
-  // the rest (and any loop on a component with boundary) goes to contractible().
+  // The same answer without CGAL's structure when it can. A loop that is not null in Z/2 homology is
+  // essential (time proportional to the loop, see null_homologous). A simple loop that is null separates
+  // its closed component, and is contractible exactly when one side has Euler characteristic 1: two face
+  // floods, one from each side of the loop and advanced in turn, decide it in time proportional to the
+  // smaller side. The rest (a loop that is not simple, any loop on a component with boundary) goes to
+  // contractible().
   bool contractible_fast(const std::vector<int>& loop);
-  // Null in H1(surface; Z/2): the component's faces can be 2-coloured so that exactly the edges the loop
-  // uses an odd number of times separate the colours. Exact for any closed edge path (simple or not) on a
-  // closed component, one face flood; a loop that is not null is non-contractible. On a component with
-  // boundary it answers contractible() instead (a sufficient condition only).
+  // Null in H1(surface; Z/2), exact for any closed edge path (simple or not) on a closed component: a
+  // tree-cotree basis of the surface's homology (built once, on the first query) reduces it to interval
+  // tests, time proportional to the loop's length times the component's genus. A loop that is not null is
+  // non-contractible. On a component with boundary it answers contractible() instead (a sufficient
+  // condition only).
   bool null_homologous(const std::vector<int>& loop);
   // How many contractibility queries CGAL answered so far (the others were decided by face floods).
   int cgal_queries() const;

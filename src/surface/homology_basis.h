@@ -1,0 +1,44 @@
+#pragma once
+// Z/2 homology classes of edge cycles on the closed components of a surface, in time proportional to the
+// cycle's length times the component's genus (not to the surface's size).
+//
+// Tree-cotree decomposition (Eppstein 2003): a spanning tree T of the vertices, a spanning tree C of the
+// faces through edges not in T, and the 2g edges left over, whose fundamental cycles (edge + tree path) are
+// a basis of H1(component; Z/2). A cycle's class is the sum of its non-tree edges' classes. A leftover edge
+// is a basis vector. A cotree edge e, above the subtree S of faces that C hangs below it, has the class of
+// the leftover edges with exactly one face in S (the boundary of the faces of S is null and crosses C only
+// at e). With the faces of C numbered in depth-first order, "in S" is an interval test.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+
+namespace chokeloops {
+
+class HomologyBasis {
+ public:
+  // `face_label`/`closed`: the components (face_components numbering) and which of them are closed; the
+  // basis is built on the closed ones only.
+  HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& face_label,
+                const std::vector<char>& closed);
+  // Whether the closed edge path `loop` (cyclic vertex list, consecutive vertices joined by mesh edges, on
+  // a closed component) is null in H1(component; Z/2).
+  bool null_homologous(const std::vector<int>& loop) const;
+  // 2g of the component (the number of leftover edges).
+  int leftover_edges(int component) const { return leftover_start_[component + 1] - leftover_start_[component]; }
+
+ private:
+  static constexpr std::int32_t kTree = -1, kUnset = -2;
+  const SurfaceMesh& mesh_;
+  const MeshAdjacency& adj_;
+  const std::vector<int>& face_label_;
+  // Per half-edge: kTree, 2i for leftover edge i, 2f+1 for the cotree edge above face f.
+  std::vector<std::int32_t> code_;
+  std::vector<std::int32_t> first_, last_;    // per face: its subtree of C is [first_, last_] in DFS order
+  std::vector<std::int32_t> leftover_start_;  // per component: its leftover edges' indices (components + 1)
+  std::vector<std::array<std::int32_t, 2>> leftover_faces_;  // per leftover edge: DFS numbers of its faces
+};
+
+}  // namespace chokeloops
