@@ -80,32 +80,16 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   }
   r.timings_ms["chokes"] = ms_since(t);
 
-  t = Clock::now();
   stage("surface", 0);
-  r.surface = extract_zero_surface(r.grid);
-  r.surface_stats = surface_stats(r.surface);
-  r.timings_ms["surface"] = ms_since(t);
-  // CHOKELOOPS_TEST_FAULT=self-check makes this check fail, so that tests can see how a bug is reported.
-  const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
-  const bool injected = fault && std::string(fault) == "self-check";
-  if ((r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold) || injected)
-    throw InternalError("self-check failed: surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
-                           std::to_string(r.chokes.handle_generators) + " handle generators");
-  if (!r.surface_stats.closed_manifold)
-    r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+  extract_checked_surface(r);
 
   t = Clock::now();
   stage("loops", 0);
-  MeshAdjacency adjacency = build_adjacency(r.surface);
-  bool any_generator = false;
-  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
-  // One topology of the surface serves the choice of every generator's curve and the check below.
-  std::unique_ptr<SurfaceTopology> topology;
-  if (any_generator) topology = std::make_unique<SurfaceTopology>(r.surface, adjacency);
-  r.loops = trace_loops(r.grid, r.surface, adjacency, r.chokes.chokes, options.loops, topology.get());
+  LoopContext context = prepare_loops(r);
+  r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get());
   r.timings_ms["loops"] = ms_since(t);
   t = Clock::now();
-  if (topology && options.check_generators) drop_contractible_generators(r.loops, *topology);
+  if (context.topology && options.check_generators) drop_contractible_generators(r.loops, *context.topology);
   r.timings_ms["check"] = ms_since(t);
   warn_about_missing_loops(r.loops, r.warnings);
   stage("done", 1);
@@ -215,6 +199,30 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   r.warnings = warnings;
   r.timings_ms["total"] = ms_since(t0);
   return r;
+}
+
+void extract_checked_surface(AnalyzeResult& r) {
+  const auto t = Clock::now();
+  r.surface = extract_zero_surface(r.grid);
+  r.surface_stats = surface_stats(r.surface);
+  r.timings_ms["surface"] = ms_since(t);
+  const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
+  const bool injected = fault && std::string(fault) == "self-check";
+  if ((r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold) || injected)
+    throw InternalError("self-check failed: surface genus " + std::to_string(r.surface_stats.genus) + " differs from the " +
+                        std::to_string(r.chokes.handle_generators) + " handle generators");
+  if (!r.surface_stats.closed_manifold)
+    r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+}
+
+LoopContext prepare_loops(const AnalyzeResult& r) {
+  LoopContext context;
+  context.adjacency = build_adjacency(r.surface);
+  bool any_generator = false;
+  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
+  // One topology of the surface serves the choice of every generator's curve and the check after.
+  if (any_generator) context.topology = std::make_unique<SurfaceTopology>(r.surface, context.adjacency);
+  return context;
 }
 
 void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& topology, const std::vector<bool>* skip) {

@@ -5,10 +5,7 @@
 #include "chokeloops/analyze_molecule.h"
 
 #include <chrono>
-#include <memory>
 
-#include "chokeloops/surface/mesh_adjacency.h"
-#include "chokeloops/surface/topology.h"
 #include "loop_checks.h"
 
 namespace chokeloops {
@@ -44,13 +41,8 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   stage("chokes", 0);
   r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
   r.timings_ms["chokes"] = ms(t);
-  t = Clock::now();
   stage("surface", 0);
-  r.surface = extract_zero_surface(r.grid);
-  r.surface_stats = surface_stats(r.surface);
-  r.timings_ms["surface"] = ms(t);
-  if (!r.surface_stats.closed_manifold)
-    r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+  extract_checked_surface(r);
 
   t = Clock::now();
   stage("channels", 0);
@@ -66,11 +58,9 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
 
   t = Clock::now();
   stage("loops", 0);
-  MeshAdjacency adjacency = build_adjacency(r.surface);
-  bool any_generator = false;
-  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
-  std::unique_ptr<SurfaceTopology> topology;
-  if (any_generator) topology = std::make_unique<SurfaceTopology>(r.surface, adjacency);
+  LoopContext context = prepare_loops(r);
+  const MeshAdjacency& adjacency = context.adjacency;
+  SurfaceTopology* topology = context.topology.get();
   r.loops.assign(r.chokes.chokes.size(), Loop{});
   std::vector<bool> done(r.chokes.chokes.size(), false);
   for (const Channel& c : m.channels) {
@@ -95,7 +85,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
     }
     rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
   }
-  std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology.get());
+  std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology);
   for (std::size_t k = 0; k < traced.size(); ++k) r.loops[rest_index[k]] = std::move(traced[k]);
   r.timings_ms["loops"] = ms(t);
   t = Clock::now();

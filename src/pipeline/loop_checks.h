@@ -1,13 +1,30 @@
 #pragma once
-// Private to src/pipeline: the checks every analysis (meshes, fields, molecules, volumes) runs on its loops
-// before reporting them, so that no front-end can report a wrong generator or hide a missing loop.
+// Private to src/pipeline: the stages and checks every analysis (meshes, fields, molecules, volumes) shares
+// between its chokes and its report, so that no front-end can skip the surface's self-check, report a wrong
+// generator or hide a missing loop.
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "chokeloops/analyze.h"
 #include "chokeloops/loops/membranes.h"
+#include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/topology.h"
 
 namespace chokeloops {
+
+// The surface stage: r.surface and r.surface_stats from r.grid, timed as "surface". A closed surface whose
+// genus differs from the handle generators is a bug (InternalError; CHOKELOOPS_TEST_FAULT=self-check forces
+// it, so that tests see how a bug is reported); an open one gets a warning.
+void extract_checked_surface(AnalyzeResult& r);
+
+// What the loop stage shares between all chokes: the surface's adjacency, and its topology when some choke
+// is a generator (the choice of a generator's curve and the check below need it).
+struct LoopContext {
+  MeshAdjacency adjacency;
+  std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
+};
+LoopContext prepare_loops(const AnalyzeResult& r);
 
 // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks that
 // it did; a generator loop that became contractible is reported as missing. Loops with `skip[i]` set (when
