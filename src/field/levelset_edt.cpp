@@ -18,13 +18,9 @@
 #include <tbb/parallel_for.h>
 
 #include "chokeloops/grid.h"
+#include "feature_transform.h"
 
 namespace chokeloops::detail {
-
-struct Site {
-  std::int64_t vertex;  // linear index of the site vertex
-  float p[3];           // closest surface point, in grid index units (vertex (i,j,k) at (i,j,k))
-};
 
 namespace {
 

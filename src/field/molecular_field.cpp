@@ -10,18 +10,9 @@
 #include <tbb/parallel_for.h>
 
 #include "chokeloops/field/levelset.h"
+#include "feature_transform.h"
 
 namespace chokeloops {
-
-namespace detail {
-struct Site {
-  std::int64_t vertex;
-  float p[3];
-};
-// levelset_edt.cpp: vertices not `known` get sign * distance to the closest point of their nearest site
-void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
-                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site = nullptr);
-}  // namespace detail
 
 const char* to_string(MolecularSurface s) {
   return s == MolecularSurface::Vdw ? "vdw" : s == MolecularSurface::Sas ? "sas" : "ses";
@@ -220,36 +211,19 @@ void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
 // SES from the SAS field: accessible vertices (sas >= 0) get sas + p; the others p minus their distance to
 // the SAS, from the feature transform of the SAS's zero crossings along grid edges.
 void shrink_to_ses(ScalarGrid& g, double probe) {
-  const int nx = g.dims[0], ny = g.dims[1], nz = g.dims[2];
   const std::size_t N = g.values.size();
   const float* f = g.values.data();
-  const std::int64_t st[3] = {1, nx, std::int64_t(nx) * ny};
-  std::vector<std::vector<detail::Site>> per_slice(static_cast<std::size_t>(nz));
-  tbb::parallel_for(tbb::blocked_range<int>(0, nz), [&](const tbb::blocked_range<int>& r) {
-    for (int k = r.begin(); k != r.end(); ++k)
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-          const int ijk[3] = {i, j, k};
-          const std::int64_t v = g.index(i, j, k);
-          if (f[v] >= 0) continue;  // sites on inside vertices; their points are the nearest crossings
-          double best = 2;
-          int axis = -1, dir = 0;
-          for (int a = 0; a < 3; ++a)
-            for (int s : {-1, 1}) {
-              if (ijk[a] + s < 0 || ijk[a] + s >= g.dims[a]) continue;
-              const float fn = f[v + s * st[a]];
-              if (fn < 0) continue;
-              const double t = double(f[v]) / (double(f[v]) - double(fn));
-              if (t < best) best = t, axis = a, dir = s;
-            }
-          if (axis < 0) continue;
-          float p[3] = {float(i), float(j), float(k)};
-          p[axis] += float(best * dir);
-          per_slice[std::size_t(k)].push_back({v, {p[0], p[1], p[2]}});
-        }
+  // Sites on inside vertices; their points are the nearest crossings.
+  const std::vector<detail::Site> sites = detail::collect_sites(g, [&](int i, int j, int k, std::int64_t v, detail::Site& site) {
+    const int ijk[3] = {i, j, k};
+    int axis, dir;
+    double t;
+    if (f[v] >= 0 || !detail::nearest_edge_crossing(g, v, ijk, axis, dir, t)) return false;
+    float p[3] = {float(i), float(j), float(k)};
+    p[axis] += float(t * dir);
+    site = {v, {p[0], p[1], p[2]}};
+    return true;
   });
-  std::vector<detail::Site> sites;
-  for (auto& s : per_slice) sites.insert(sites.end(), s.begin(), s.end());
   std::vector<std::uint8_t> known(N);
   for (std::size_t v = 0; v < N; ++v) known[v] = f[v] >= 0;
   if (sites.empty()) {  // no accessible space at all: everything is inside

@@ -274,6 +274,17 @@ VolumeImage read_volume(const std::string& path, int volume) {
   fail(path, "not a volume this program reads (.nii, .nii.gz, .hdr/.img, .nrrd, .nhdr)");
 }
 
+namespace {
+// Writes a made-up Nrrd gzip-compressed (the outputs are label maps: mostly zeros).
+void save_nrrd_gzip(const Nrrd* nrrd, const std::string& path) {
+  NrrdIoState* io = nrrdIoStateNew();
+  nrrdIoStateEncodingSet(io, nrrdEncodingGzip);
+  const int bad = nrrdSave(path.c_str(), nrrd, io);
+  nrrdIoStateNix(io);
+  if (bad) throw Error("cannot write " + path + ": " + biff_message(), 3);
+}
+}  // namespace
+
 std::string label_volume_name(const VolumeImage& like, const std::string& stem) {
   return stem + (like.format == "nrrd" ? ".nrrd" : ".nii.gz");
 }
@@ -303,11 +314,7 @@ void write_label_volume(const VolumeImage& like, const std::vector<std::int32_t>
       out->axis[a].spacing = in->axis[a].spacing;
       out->axis[a].kind = nrrdKindDomain;
     }
-    NrrdIoState* io = nrrdIoStateNew();
-    nrrdIoStateEncodingSet(io, nrrdEncodingGzip);
-    int bad = nrrdSave(path.c_str(), out.get(), io);
-    nrrdIoStateNix(io);
-    if (bad) throw Error("cannot write " + path + ": " + biff_message(), 3);
+    save_nrrd_gzip(out.get(), path);
     return;
   }
   const nifti_image* in = static_cast<const nifti_image*>(like.header.get());
@@ -365,11 +372,7 @@ void write_scalar_volume(const VolumeImage& image, const std::string& path) {
       for (int r = 0; r < 3; ++r) out->axis[a].spaceDirection[r] = image.affine[r][a];
       out->axis[a].kind = nrrdKindDomain;
     }
-    NrrdIoState* io = nrrdIoStateNew();
-    nrrdIoStateEncodingSet(io, nrrdEncodingGzip);
-    int bad = nrrdSave(path.c_str(), out.get(), io);
-    nrrdIoStateNix(io);
-    if (bad) throw Error("cannot write " + path + ": " + biff_message(), 3);
+    save_nrrd_gzip(out.get(), path);
     return;
   }
   const int64_t dims[8] = {3, image.dims[0], image.dims[1], image.dims[2], 1, 1, 1, 1};

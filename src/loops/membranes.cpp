@@ -98,6 +98,9 @@ class LoopTracer {
       if (a == Attempt::Grow || a == Attempt::GrowContractible) {
         if (r >= full) break;
         r = std::min(full, int(std::ceil(r * 1.8)));
+        // A box past half the grid costs about what the whole grid does: go there at once rather than
+        // flood one more box that may still miss the far side (a block's handle runs its hole's length).
+        if (2 * r >= full) r = full;
       } else {
         if (seed_r <= 1) break;
         seed_r = seed_r * 2 / 3;
@@ -375,6 +378,13 @@ class LoopTracer {
     std::array<std::int64_t, 14> local_delta;
     for (int k = 0; k < 14; ++k)
       local_delta[k] = offsets[k][0] + std::int64_t(ly) * offsets[k][1] + std::int64_t(lz) * offsets[k][2];
+    // Only the shore where the two zones meet can hold interface segments: a surface face whose corners
+    // carry both labels lies in one tetrahedron, whose labelled corners are pairwise neighbours of both
+    // zones. So the zones' contact is marked during the flood (whichever of two touching vertices is
+    // reached second sees the other), and only that part of the shore is labelled below: on a big box
+    // it is a thin sheet, where the whole shore is millions of vertices.
+    static thread_local std::vector<std::uint8_t> contact;
+    contact.assign(cell.size(), 0);
     std::vector<std::uint32_t> shore_local;
     for (std::size_t b = 0; b < buckets.size(); ++b) {
       for (std::size_t q = 0; q < buckets[b].size(); ++q) {
@@ -385,6 +395,7 @@ class LoopTracer {
           std::uint32_t& w = cell[ul];
           const std::uint32_t lu = w & kZone;
           if (lu == kOutside) { at_shore = true; return; }
+          if (lu != 0 && lu != lx) { contact[xl] = contact[ul] = 1; return; }
           if (lu == 0) {
             w |= lx;
             if (!by_distance) {
@@ -405,8 +416,8 @@ class LoopTracer {
       std::vector<std::uint32_t>().swap(buckets[b]);
     }
     std::vector<Node> shore;
-    shore.reserve(shore_local.size());
-    for (std::uint32_t xl : shore_local) shore.push_back(node_of(xl));
+    for (std::uint32_t xl : shore_local)
+      if (contact[xl]) shore.push_back(node_of(xl));
 
     // Label the surface vertices on the crossing edges by their region end.
     // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.

@@ -12,7 +12,7 @@ namespace {
 
 struct P2 { double x, y; };
 
-double len2(P2 a, P2 b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double len2(P2 a, P2 b) { return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y)); }  // hypot: 3x slower here
 // Mononen's triarea2: > 0 when c lies to the right of a->b (y up).
 double triarea2(P2 a, P2 b, P2 c) { return (c.x - a.x) * (b.y - a.y) - (b.x - a.x) * (c.y - a.y); }
 bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
