@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <openvdb/io/File.h>
@@ -227,6 +228,18 @@ TEST_F(BadInput, FuzzOffCountsBeyondInt) {
   expect_bad(write("float.off", "OFF\n3.38812e+09 1 0\n0 0 0\n"), "is not a non-negative integer");
   expect_bad(write("big.off", "OFF\n3388120000 1 0\n0 0 0\n"), "more than a file of");
   expect_bad(write("neg.off", "OFF\n-4 1 0\n0 0 0\n"), "is not a non-negative integer");
+}
+
+TEST_F(BadInput, FuzzNoFaceLeftAfterRemovingDegenerateOnes) {
+  // Found by fuzzing (UBSan, optimised build): faces with distinct indices whose points are collinear are all
+  // removed as degenerate; CGAL's outward orientation then read the orientation of a component that does not
+  // exist. Refused instead: nothing is left to convert.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/obj/regression-478ce6d8f6fa", std::ios::binary);
+  const std::string obj((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(obj.empty());
+  expect_bad(write("degenerate.obj", obj), "every face is degenerate");
+  expect_bad(write("collinear.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 3 4\n"),
+             "every face is degenerate");
 }
 
 TEST_F(BadInput, FuzzFlatClosedMeshIsNotOriented) {

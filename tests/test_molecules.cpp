@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <Eigen/Dense>
@@ -279,9 +280,12 @@ TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
   };
   const std::string dbref2 = "DBREF1 1ABC A    1    10  UNP                  P12345_HUMAN\n"
                        "DBREF2 1ABC A     P12345                     9999999999  9999999999\n";
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/cif/regression-cc289392782f", std::ios::binary);
+  const std::string corpus((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(corpus.empty());
   const std::string pdb_atom = "ATOM      1  CA  ALA A   1      11.104   6.134  -6.504  1.00  0.00           C\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/cif/regression-cc289392782f", "beyond 2147483647"},
+      {write("regression.cif", corpus), "beyond 2147483647"},
       {write("serial.cif", "data_x\n" + atoms + "ATOM 99999999999 C CA . GLY A 1 0 0 0 1 10 1 A 1\n"), "beyond 2147483647"},
       {write("seq.cif", "data_x\n" + atoms + "ATOM 1 C CA . GLY A 1 0 0 0 1 10 -4294967296 A 1\n"), "auth_seq_id"},
       {write("range.cif", "data_x\n" + assembly("'(1-2000000000)'") + atoms + row1), "more than 100000 operators"},
