@@ -7,7 +7,7 @@
 # Environment:
 #   FUZZ_RUNS=N          stop each harness after N executions instead (SECONDS is then only an upper bound,
 #                        0 = none; e.g. FUZZ_RUNS=1000000 scripts/fuzz.sh 0 obj)
-#   FUZZ_MAX_LEN=BYTES   largest input libFuzzer makes (default per harness: 8192, 65536 for vdb)
+#   FUZZ_MAX_LEN=BYTES   largest input libFuzzer makes (default 8192; 65536 for vdb, with -len_control=0)
 #   FUZZ_BUILD_TYPE=T    CMAKE_BUILD_TYPE of the fuzz build (default RelWithDebInfo: -O2 -g, assertions on)
 #   FUZZ_UPDATE_CORPUS=1 merges what a run found into fuzz/corpus/NAME (minimised: only inputs that add coverage).
 #   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
@@ -29,11 +29,14 @@ for name in "${NAMES[@]}"; do
   work="$BUILD/corpus/$name" findings="$BUILD/findings/$name"
   mkdir -p "$work" "$findings"
   log="$BUILD/fuzz_$name.log"
-  max_len="${FUZZ_MAX_LEN:-8192}"
-  [ -n "${FUZZ_MAX_LEN:-}" ] || [ "$name" != vdb ] || max_len=65536
+  max_len="${FUZZ_MAX_LEN:-8192}" extra=()
+  if [ "$name" = vdb ]; then  # binary seeds of 10-33 KB: mutate them at full length from the start
+    [ -n "${FUZZ_MAX_LEN:-}" ] || max_len=65536
+    extra=(-len_control=0)
+  fi
   start=$(date +%s)
   ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
-    -rss_limit_mb=2048 \
+    -rss_limit_mb=2048 "${extra[@]}" \
     -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
   runs=$(grep -ao 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || true)
   [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
