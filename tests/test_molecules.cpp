@@ -292,6 +292,21 @@ TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
       {write("range_int.cif", "data_x\n" + assembly("'(1,3-99999999999)'") + atoms + row1), "beyond 2147483647"},
       {write("dbref.pdb", dbref2 + pdb_atom), "DBREF2"},
   };
+  // A 75-column SSBOND (gemmi read its distance, columns 74-78, past the end of the record: heap overflow) and
+  // the fuzzed input that found it are read (they are short connection records, not errors).
+  {
+    const std::string ssbond = "SSBOND   1 CYS A    1    CYS A    1                          1555   1555  2.";
+    ASSERT_EQ(ssbond.size(), 75u);
+    EXPECT_EQ(read_molecule(write("ssbond.pdb", ssbond + "\n" + pdb_atom)).atoms.size(), 1u);
+    std::ifstream r(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/pdb/regression-2149ea842f1c", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(r)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty());
+    try {
+      read_molecule(write("regression.pdb", bytes));
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code, 2) << e.what();
+    }
+  }
   for (auto& [path, what] : cases) {
     try {
       read_molecule(path);

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -205,6 +207,40 @@ void check_pdb_for_gemmi(const std::string& text, const std::string& path) {
   }
 }
 
+// gemmi keeps SSBOND, LINK and CISPEP records as strings and reads their fixed columns later without checking
+// the string's length (SSBOND's distance, columns 74-78, is read when the line is longer than 73: a heap
+// overflow on a 75-column line; found by fuzzing). Such records are padded with blanks to the 80 columns of the
+// format, which is what missing columns mean, and a NUL inside one (which would end gemmi's copy) becomes a blank.
+int pad_connection_records(std::string& text) {
+  auto id4 = [](const char* s) {  // gemmi's ialpha4_id (the first four characters, case folded), same bits
+    auto u = [&](int i) { return std::uint32_t(int(s[i])); };
+    return (u(0) << 24 | u(1) << 16 | u(2) << 8 | u(3)) & ~0x20202020u;
+  };
+  static const std::uint32_t kConn[] = {id4("SSBO"), id4("LINK"), id4("CISP")};
+  std::string out;
+  int padded = 0;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    const bool newline = end != std::string::npos;
+    if (!newline) end = text.size();
+    std::string line = text.substr(pos, end - pos);
+    if (line.size() >= 4 && std::find(std::begin(kConn), std::end(kConn), id4(line.c_str())) != std::end(kConn)) {
+      const bool cr = !line.empty() && line.back() == '\r';
+      if (cr) line.pop_back();
+      std::replace(line.begin(), line.end(), '\0', ' ');
+      if (line.size() < 80) line.resize(80, ' ');
+      if (cr) line.push_back('\r');
+      ++padded;
+    }
+    out += line;
+    if (newline) out += '\n';
+    pos = end + 1;
+  }
+  if (padded) text.swap(out);
+  return padded;
+}
+
 struct Radius {
   const char* element;
   double r;
@@ -266,6 +302,7 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
       st = gemmi::make_structure(std::move(doc));
     } else {
       check_pdb_for_gemmi(text, path);
+      pad_connection_records(text);
       st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
     }
   } catch (const Error&) {
