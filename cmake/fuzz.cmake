@@ -2,15 +2,27 @@
 # .vdb, PDB/mmCIF, NIfTI/NRRD), over the input stage (src/io, src/field) built with
 # -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh. Included from the top
 # CMakeLists.txt, which then stops (no other targets).
+# The build type sets the optimisation (scripts/fuzz.sh: FUZZ_BUILD_TYPE, default RelWithDebInfo = -O2 -g;
+# Debug gets -O1 here). Assertions stay on in every build type
+# (NDEBUG is taken out): a failed assertion in our code or in CGAL/Eigen is a finding too.
 
 if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
   message(FATAL_ERROR "CHOKELOOPS_FUZZ needs clang (libFuzzer): configure with CXX=clang++")
 endif()
-set(CHOKELOOPS_FUZZ_FLAGS -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+foreach(config RELEASE RELWITHDEBINFO MINSIZEREL)
+  string(REPLACE "-DNDEBUG" "" CMAKE_CXX_FLAGS_${config} "${CMAKE_CXX_FLAGS_${config}}")
+endforeach()
+set(CHOKELOOPS_FUZZ_OPT)
+if(NOT CMAKE_BUILD_TYPE OR CMAKE_BUILD_TYPE STREQUAL "Debug")
+  set(CHOKELOOPS_FUZZ_OPT -O1)
+endif()
+set(CHOKELOOPS_FUZZ_FLAGS ${CHOKELOOPS_FUZZ_OPT} -g -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
   -fno-sanitize-recover=undefined
   # gemmi's std::hash<ResidueId> shifts the residue number left, negative ones too (residue -1 is common):
   # undefined in C++17, two's-complement arithmetic in practice and in C++20, and only a hash. Not ours to fix.
-  -fno-sanitize=shift-base)
+  -fno-sanitize=shift-base
+  # third-party false positives, each explained in the file
+  -fsanitize-ignorelist=${PROJECT_SOURCE_DIR}/cmake/fuzz_ignorelist.txt)
 file(GLOB CHOKELOOPS_FUZZ_INPUT_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/io/*.cpp
   ${PROJECT_SOURCE_DIR}/src/field/*.cpp)
 add_library(chokeloops_fuzz_input STATIC ${CHOKELOOPS_FUZZ_INPUT_SOURCES})

@@ -2,18 +2,25 @@
 # Fuzzes every input reader with libFuzzer (clang, ASan + UBSan): configures build-fuzz with
 # CHOKELOOPS_FUZZ=ON (cmake/fuzz.cmake), builds the harnesses fuzz/fuzz_*.cpp and runs each for SECONDS,
 # starting from the corpus kept in fuzz/corpus/NAME. Prints one line per harness:
-#   fuzz NAME: N executions, 0 crashes          (or the number of findings and where they are)
+#   fuzz NAME: N executions, 0 crashes (T s, R exec/s)   (or the number of findings and where they are)
 # Usage: scripts/fuzz.sh [SECONDS] [NAME...]   (default 60 s, every harness)
-# FUZZ_UPDATE_CORPUS=1 merges what a run found into fuzz/corpus/NAME (minimised: only inputs that add coverage).
+# Environment:
+#   FUZZ_RUNS=N          stop each harness after N executions instead (SECONDS is then only an upper bound,
+#                        0 = none; e.g. FUZZ_RUNS=1000000 scripts/fuzz.sh 0 obj)
+#   FUZZ_MAX_LEN=BYTES   largest input libFuzzer makes (default 8192; 65536 for vdb, with -len_control=0)
+#   FUZZ_BUILD_TYPE=T    CMAKE_BUILD_TYPE of the fuzz build (default RelWithDebInfo: -O2 -g, assertions on)
+#   FUZZ_UPDATE_CORPUS=1 merges what a run found into fuzz/corpus/NAME (minimised: only inputs that add coverage).
+#   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${BUILD_DIR:-$ROOT/build-fuzz}"
 SECONDS_PER="${1:-60}"
+RUNS="${FUZZ_RUNS:--1}"
 shift || true
 NAMES=("$@")
 [ ${#NAMES[@]} -gt 0 ] || NAMES=($(cd "$ROOT/fuzz/corpus" && ls))
 bash "$ROOT/scripts/install-deps.sh" fuzz >/dev/null
-CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Debug -DCHOKELOOPS_FUZZ=ON >"$BUILD.log" 2>&1 ||
+CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE="${FUZZ_BUILD_TYPE:-RelWithDebInfo}" -DCHOKELOOPS_FUZZ=ON >"$BUILD.log" 2>&1 ||
   { tail -20 "$BUILD.log"; exit 1; }
 cmake --build "$BUILD" -j"${JOBS:-2}" $(printf -- '--target fuzz_%s ' "${NAMES[@]}") >>"$BUILD.log" 2>&1 ||
   { tail -30 "$BUILD.log"; exit 1; }
@@ -22,15 +29,24 @@ for name in "${NAMES[@]}"; do
   work="$BUILD/corpus/$name" findings="$BUILD/findings/$name"
   mkdir -p "$work" "$findings"
   log="$BUILD/fuzz_$name.log"
-  ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -max_len=65536 -rss_limit_mb=2048 \
+  max_len="${FUZZ_MAX_LEN:-8192}" extra=()
+  if [ "$name" = vdb ]; then  # binary seeds of 10-33 KB: mutate them at full length from the start
+    [ -n "${FUZZ_MAX_LEN:-}" ] || max_len=65536
+    extra=(-len_control=0)
+  fi
+  start=$(date +%s)
+  ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
+    -rss_limit_mb=2048 "${extra[@]}" \
     -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
   runs=$(grep -ao 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || true)
   [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
+  took=$(( $(date +%s) - start ))
+  timing="${took} s, $(( ${runs:-0} / (took > 0 ? took : 1) )) exec/s"
   found=$(find "$findings" -type f | wc -l)
   if [ "$found" -eq 0 ]; then
-    echo "fuzz $name: ${runs:-0} executions, 0 crashes"
+    echo "fuzz $name: ${runs:-0} executions, 0 crashes ($timing)"
   else
-    echo "fuzz $name: ${runs:-0} executions, $found crashes (inputs in $findings, log $log)"
+    echo "fuzz $name: ${runs:-0} executions, $found crashes ($timing; inputs in $findings, log $log)"
     status=1
   fi
   if [ "${FUZZ_UPDATE_CORPUS:-0}" = 1 ]; then

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <openvdb/io/File.h>
@@ -227,6 +228,38 @@ TEST_F(BadInput, FuzzOffCountsBeyondInt) {
   expect_bad(write("float.off", "OFF\n3.38812e+09 1 0\n0 0 0\n"), "is not a non-negative integer");
   expect_bad(write("big.off", "OFF\n3388120000 1 0\n0 0 0\n"), "more than a file of");
   expect_bad(write("neg.off", "OFF\n-4 1 0\n0 0 0\n"), "is not a non-negative integer");
+  // binary OFF: big-endian counts after the keyword line (CGAL converted their halfedge estimate to int)
+  expect_bad(write("bin.off", std::string("OFF BINARY\n\x30\x20\x30\x20\x30\x0a\x31\x20\0\0\0\0", 23)),
+             "binary OFF header announces");
+  expect_bad(write("binshort.off", "OFF BINARY\n\0\0"), "truncated binary OFF header");
+}
+
+TEST_F(BadInput, FuzzTinyObjectInLargeUnits) {
+  // Found by fuzzing (PLY and STL): an object so small that its voxel size cubed is below OpenVDB's 3e-15 made
+  // OpenVDB's transform throw its own exception. Refused with exit code 2 and what to do.
+  std::string tiny = "OFF\n4 4 0\n0 0 0\n1e-5 0 0\n0 1e-5 0\n0 0 1e-5\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  expect_bad(write("tiny.off", tiny), "smallest OpenVDB");
+  for (const char* name : {"ply/regression-b45680d4d87f", "stl/regression-bf93d9d201a6"}) {
+    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/" + name, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty()) << name;
+    const std::string ext = std::string(name).substr(0, 3);
+    CliRun r = run_cli("'" + write("fuzz." + ext, bytes) + "' -o '" + out + "' --resolution 16");
+    EXPECT_EQ(r.code, 2) << name << ": " << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  }
+}
+
+TEST_F(BadInput, FuzzNoFaceLeftAfterRemovingDegenerateOnes) {
+  // Found by fuzzing (UBSan, optimised build): faces with distinct indices whose points are collinear are all
+  // removed as degenerate; CGAL's outward orientation then read the orientation of a component that does not
+  // exist. Refused instead: nothing is left to convert.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/obj/regression-478ce6d8f6fa", std::ios::binary);
+  const std::string obj((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(obj.empty());
+  expect_bad(write("degenerate.obj", obj), "every face is degenerate");
+  expect_bad(write("collinear.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 3 4\n"),
+             "every face is degenerate");
 }
 
 TEST_F(BadInput, FuzzFlatClosedMeshIsNotOriented) {

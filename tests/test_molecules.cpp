@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <Eigen/Dense>
@@ -252,5 +253,79 @@ TEST(MoleculeInput, BadInputExitsTwoWithOneLine) {
     EXPECT_EQ(o.code, 2) << path << ": " << o.err;
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
   }
+  fs::remove_all(dir);
+}
+
+// Found by fuzzing: gemmi reads integers without an overflow check (undefined behaviour beyond the range of int)
+// and expands an assembly's operator range "(1-N)" one name at a time. Such values are refused, with exit code 2
+// and one line, before gemmi sees them; ordinary values still read.
+TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
+  fs::path dir = fs::temp_directory_path() / ("chokeloops_mol_fuzz_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return (dir / name).string();
+  };
+  const std::string atoms =
+      "loop_\n_atom_site.group_PDB\n_atom_site.id\n_atom_site.type_symbol\n_atom_site.label_atom_id\n"
+      "_atom_site.label_alt_id\n_atom_site.label_comp_id\n_atom_site.label_asym_id\n_atom_site.label_seq_id\n"
+      "_atom_site.Cartn_x\n_atom_site.Cartn_y\n_atom_site.Cartn_z\n_atom_site.occupancy\n"
+      "_atom_site.B_iso_or_equiv\n_atom_site.auth_seq_id\n_atom_site.auth_asym_id\n_atom_site.pdbx_PDB_model_num\n";
+  const std::string row1 = "ATOM 1 C CA . GLY A 1 0.000 0.000 0.000 1.00 10.0 1 A 1\n";
+  auto assembly = [](const std::string& expr) {
+    return "_pdbx_struct_assembly.id 1\n_pdbx_struct_assembly.details author_defined_assembly\n"
+           "_pdbx_struct_assembly.method_details ?\n_pdbx_struct_assembly.oligomeric_details monomeric\n"
+           "_pdbx_struct_assembly.oligomeric_count 1\n_pdbx_struct_assembly_gen.assembly_id 1\n"
+           "_pdbx_struct_assembly_gen.oper_expression " + expr + "\n_pdbx_struct_assembly_gen.asym_id_list A\n";
+  };
+  const std::string dbref2 = "DBREF1 1ABC A    1    10  UNP                  P12345_HUMAN\n"
+                       "DBREF2 1ABC A     P12345                     9999999999  9999999999\n";
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/cif/regression-cc289392782f", std::ios::binary);
+  const std::string corpus((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(corpus.empty());
+  const std::string pdb_atom = "ATOM      1  CA  ALA A   1      11.104   6.134  -6.504  1.00  0.00           C\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {write("regression.cif", corpus), "beyond 2147483647"},
+      {write("serial.cif", "data_x\n" + atoms + "ATOM 99999999999 C CA . GLY A 1 0 0 0 1 10 1 A 1\n"), "beyond 2147483647"},
+      {write("seq.cif", "data_x\n" + atoms + "ATOM 1 C CA . GLY A 1 0 0 0 1 10 -4294967296 A 1\n"), "auth_seq_id"},
+      {write("range.cif", "data_x\n" + assembly("'(1-2000000000)'") + atoms + row1), "more than 100000 operators"},
+      {write("range_int.cif", "data_x\n" + assembly("'(1,3-99999999999)'") + atoms + row1), "beyond 2147483647"},
+      {write("dbref.pdb", dbref2 + pdb_atom), "DBREF2"},
+  };
+  // A 75-column SSBOND (gemmi read its distance, columns 74-78, past the end of the record: heap overflow) and
+  // the fuzzed input that found it are read (they are short connection records, not errors).
+  {
+    std::string ssbond = "SSBOND   1 CYS A    1    CYS A    1";
+    ssbond.resize(73, ' ');
+    ssbond += "2.";
+    ASSERT_EQ(ssbond.size(), 75u);
+    EXPECT_EQ(read_molecule(write("ssbond.pdb", ssbond + "\n" + pdb_atom)).atoms.size(), 1u);
+    std::ifstream r(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/pdb/regression-2149ea842f1c", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(r)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty());
+    try {
+      read_molecule(write("regression.pdb", bytes));
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code, 2) << e.what();
+    }
+  }
+  for (auto& [path, what] : cases) {
+    try {
+      read_molecule(path);
+      ADD_FAILURE() << path << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code, 2) << path;
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+    Outcome o = cli("'" + path + "' -o '" + (dir / "out").string() + "' --quiet");
+    EXPECT_EQ(o.code, 2) << path << ": " << o.err;
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+  }
+  // within range: an icosahedral assembly and ordinary numbers are read as before
+  Molecule m = read_molecule(write("ok.cif", "data_x\n" + assembly("'(1-60)'") + atoms + row1 +
+                                                 "ATOM 2147483647 C CB . GLY A 1 1.5 0 0 1 10 -2147483647 A 1\n"));
+  EXPECT_EQ(m.atoms.size(), 2u);
   fs::remove_all(dir);
 }

@@ -284,6 +284,8 @@ std::size_t parse_bytes(const std::string& text) {
   return std::size_t(v * mul);
 }
 
+constexpr double kMinVoxelSize = 1.46e-5;  // cube root of OpenVDB's 3e-15, rounded up
+
 LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions& o, const std::string& name) {
   ensure_openvdb_initialized();
   const auto t0 = Clock::now();
@@ -313,6 +315,15 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
     throw Error("--resolution must be at least 2 (got " + std::to_string(o.resolution) + ")");
   const double h = o.voxel_size > 0 ? o.voxel_size : longest / o.resolution;
   if (!(h > 0) || !std::isfinite(h)) throw Error("bad voxel size");
+  // OpenVDB's linear transform refuses a scale whose cube is below 3e-15 (an openvdb::ArithmeticError out of
+  // meshToVolume's transform; found by fuzzing): a tiny object in large units, e.g. 1 mm given in metres at 256.
+  if (h * h * h < 3.1e-15) {
+    std::ostringstream s;
+    s << who << ": voxel size " << h << " is below " << kMinVoxelSize
+      << ", the smallest OpenVDB's transforms take (the object is " << longest
+      << " units long): give the coordinates in smaller units (e.g. mm instead of m) or a coarser resolution";
+    throw Error(s.str());
+  }
   if (longest / h > 1e6) throw Error(who + ": voxel size " + std::to_string(h) + " gives more than 1e6 voxels per side");
   const double margin = o.margin >= 0 ? o.margin : default_margin(longest, h);
   res.margin = margin;

@@ -265,6 +265,10 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
   } catch (const std::exception&) {
     // leave as is: OpenVDB's mesh conversion copes with degenerate faces
   }
+  // Faces that are not degenerate as index triples can all be degenerate as geometry (collinear points).
+  // Nothing is left then, and CGAL's outward orientation reads the orientation of a first component that does
+  // not exist (found by fuzzing).
+  if (sm.number_of_faces() == 0) throw Error(who + ": every face is degenerate (no area); nothing to convert");
 
   // 4. boundary
   std::vector<SMesh::Halfedge_index> cycles;

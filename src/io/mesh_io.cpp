@@ -77,6 +77,30 @@ std::string printable(std::string s) {
   return s;
 }
 
+// Binary OFF: after the line with the BINARY keyword, three big-endian int32 (vertices, faces, edges). CGAL takes
+// them as they are and converts an estimate of the halfedges to int (undefined beyond INT_MAX, found by fuzzing):
+// the counts must be non-negative and fit the file (12 bytes per vertex, at least 4 per face).
+void check_binary_off_header(const std::string& path, std::uintmax_t size, const std::string& first_line) {
+  if (first_line.find("nOFF") != std::string::npos || first_line.find("4OFF") != std::string::npos) return;
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::getline(in, line);  // the keyword line, up to its newline as CGAL reads it
+  unsigned char b[12];
+  in.read(reinterpret_cast<char*>(b), 12);
+  if (in.gcount() < 12) throw Error(q(path) + ": truncated binary OFF header (no vertex and face counts)");
+  auto be32 = [&](int i) {
+    return std::int32_t(std::uint32_t(b[4 * i]) << 24 | std::uint32_t(b[4 * i + 1]) << 16 |
+                        std::uint32_t(b[4 * i + 2]) << 8 | std::uint32_t(b[4 * i + 3]));
+  };
+  const std::int64_t nv = be32(0), nf = be32(1);
+  if (nv < 0 || nf < 0 || std::uintmax_t(nv) * 12 > size || std::uintmax_t(nf) * 4 > size) {
+    std::ostringstream s;
+    s << q(path) << ": binary OFF header announces " << nv << " vertices and " << nf
+      << " faces, which a file of " << size << " bytes cannot hold (truncated or malformed)";
+    throw Error(s.str());
+  }
+}
+
 // CGAL's OFF reader reads the counts as floating point and converts them to int (undefined beyond INT_MAX,
 // found by fuzzing): the counts must be non-negative integers that a file of this size can hold.
 void check_off_header(const std::string& path, std::uintmax_t size) {
@@ -86,7 +110,10 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   while (tokens.size() < 4 && std::getline(in, line)) {
     const auto hash = line.find('#');
     if (hash != std::string::npos) line.erase(hash);
-    if (tokens.empty() && line.find("BINARY") != std::string::npos) return;  // binary OFF: CGAL checks it
+    if (tokens.empty() && line.find("BINARY") != std::string::npos) {
+      check_binary_off_header(path, size, line);
+      return;
+    }
     std::istringstream ls(line);
     for (std::string t; tokens.size() < 4 && ls >> t;) tokens.push_back(t);
   }

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <iterator>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -93,6 +95,152 @@ int blank_digit_element_columns(std::string& text) {
   return count;
 }
 
+// ---- what gemmi trusts (found by fuzzing) ----
+// gemmi's integer parsing (string_to_int, no_sign_atoi) does not check for overflow: a number beyond the range of
+// int is undefined behaviour there, and the operator ranges of an assembly ("(1-60)") are expanded one name at a
+// time, so "(1-2000000000)" would fill the memory. The items gemmi reads that way are checked here first.
+constexpr long long kMaxOperators = 100000;  // operator names one assembly generator may expand to
+
+bool is_space_char(char c) { return c == ' ' || (c >= 9 && c <= 13); }
+
+// The magnitude of the integer gemmi reads at the start of v (spaces, a sign, digits; at most `length`
+// characters when length > 0): -1 when it does not fit in an int, 0 when there is none.
+long long leading_int(const char* v, std::size_t n, bool sign) {
+  std::size_t i = 0;
+  while (i < n && is_space_char(v[i])) ++i;
+  if (sign && i < n && (v[i] == '-' || v[i] == '+')) ++i;
+  long long x = 0;
+  for (; i < n && std::isdigit(static_cast<unsigned char>(v[i])); ++i) {
+    x = x * 10 + (v[i] - '0');
+    if (x > 2147483647LL) return -1;
+  }
+  return x;
+}
+
+std::string shown(std::string v) {
+  if (v.size() > 40) v = v.substr(0, 37) + "...";
+  for (auto& c : v)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return v;
+}
+
+// mmCIF items (lower case) that make_structure converts with string_to_int / no_sign_atoi, besides every *seq_id.
+bool gemmi_int_item(const std::string& tag) {
+  static const std::set<std::string> items = {
+      "_atom_site.id", "_atom_site.pdbx_formal_charge", "_atom_site.pdbx_tls_group_id",
+      "_struct_conf.pdbx_pdb_helix_class", "_struct_conf.pdbx_pdb_helix_length",
+      "_pdbx_struct_assembly.oligomeric_count", "_pdbx_sifts_xref_db.unp_num", "_refine.ls_number_reflns_obs",
+      "_exptl.crystals_number", "_reflns.number_obs", "_software.pdbx_ordinal", "_entity_poly_seq.num",
+      "_struct_ref_seq.seq_align_beg", "_struct_ref_seq.seq_align_end", "_struct_ref_seq.db_align_beg",
+      "_struct_ref_seq.db_align_end", "_struct_ref_seq.pdbx_auth_seq_align_beg",
+      "_struct_ref_seq.pdbx_auth_seq_align_end"};
+  return ends_with(tag, "seq_id") || items.count(tag) > 0;
+}
+
+// How many operator names gemmi's parse_operation_expr makes of an oper_expression, counted the way it
+// parses (without making them); -1 when a number in it does not fit in an int.
+long long operator_count(const std::string& expr) {
+  std::size_t start = 0, close_br = std::string::npos;
+  if (!expr.empty() && expr[0] == '(') {
+    start = 1;
+    close_br = expr.find(')');
+  }
+  long long total = 0;
+  for (;;) {
+    const std::size_t sep = std::min(expr.find(',', start), close_br);
+    const std::size_t minus = expr.find('-', start);
+    if (minus < sep) {
+      const long long lo = leading_int(expr.c_str() + start, expr.size() - start, false);
+      const long long hi = leading_int(expr.c_str() + minus + 1, expr.size() - minus - 1, false);
+      if (lo < 0 || hi < 0) return -1;
+      if (hi >= lo) total += hi - lo + 1;
+    } else {
+      total += 1;
+    }
+    if (total > kMaxOperators || sep == close_br) break;
+    start = sep + 1;
+  }
+  return total;
+}
+
+void check_cif_for_gemmi(const gemmi::cif::Document& doc, const std::string& path) {
+  auto check = [&](const std::string& tag_any_case, const std::string& value) {
+    const std::string tag = lower(tag_any_case);
+    if (gemmi_int_item(tag) && leading_int(value.c_str(), value.size(), true) < 0)
+      fail(path, "mmCIF value '" + shown(value) + "' of " + tag_any_case +
+                     " is an integer beyond 2147483647, which this reader cannot hold");
+    if (tag == "_pdbx_struct_assembly_gen.oper_expression") {
+      const long long n = operator_count(gemmi::cif::as_string(value));
+      if (n < 0 || n > kMaxOperators)
+        fail(path, "mmCIF assembly operator expression '" + shown(value) + "' names " +
+                       (n < 0 ? std::string("operators beyond 2147483647") :
+                                "more than " + std::to_string(kMaxOperators) + " operators"));
+    }
+  };
+  for (const gemmi::cif::Block& block : doc.blocks)
+    for (const gemmi::cif::Item& item : block.items) {
+      if (item.type == gemmi::cif::ItemType::Pair) {
+        check(item.pair[0], item.pair[1]);
+      } else if (item.type == gemmi::cif::ItemType::Loop) {
+        const std::size_t w = item.loop.tags.size();
+        for (std::size_t c = 0; c < w; ++c)
+          for (std::size_t i = c; i < item.loop.values.size(); i += w) check(item.loop.tags[c], item.loop.values[i]);
+      }
+    }
+}
+
+// PDB: the only integer fields gemmi reads wider than 9 digits are the two 10-column sequence numbers of DBREF2.
+void check_pdb_for_gemmi(const std::string& text, const std::string& path) {
+  std::size_t pos = 0, lineno = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    ++lineno;
+    const std::size_t len = end - pos;
+    if (len > 45 && text[pos + 5] == '2' && lower(text.substr(pos, 4)) == "dbre")
+      for (std::size_t col : {std::size_t(45), std::size_t(57)})
+        if (col < len && leading_int(text.c_str() + pos + col, std::min<std::size_t>(10, len - col), true) < 0)
+          fail(path, "line " + std::to_string(lineno) + ": DBREF2 sequence number '" +
+                         shown(text.substr(pos + col, std::min<std::size_t>(10, len - col))) +
+                         "' is beyond 2147483647");
+    pos = end + 1;
+  }
+}
+
+// gemmi keeps SSBOND, LINK and CISPEP records as strings and reads their fixed columns later without checking
+// the string's length (SSBOND's distance, columns 74-78, is read when the line is longer than 73: a heap
+// overflow on a 75-column line; found by fuzzing). Such records are padded with blanks to the 80 columns of the
+// format, which is what missing columns mean, and a NUL inside one (which would end gemmi's copy) becomes a blank.
+int pad_connection_records(std::string& text) {
+  auto id4 = [](const char* s) {  // gemmi's ialpha4_id (the first four characters, case folded), same bits
+    auto u = [&](int i) { return std::uint32_t(int(s[i])); };
+    return (u(0) << 24 | u(1) << 16 | u(2) << 8 | u(3)) & ~0x20202020u;
+  };
+  static const std::uint32_t kConn[] = {id4("SSBO"), id4("LINK"), id4("CISP")};
+  std::string out;
+  int padded = 0;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    const bool newline = end != std::string::npos;
+    if (!newline) end = text.size();
+    std::string line = text.substr(pos, end - pos);
+    if (line.size() >= 4 && std::find(std::begin(kConn), std::end(kConn), id4(line.c_str())) != std::end(kConn)) {
+      const bool cr = !line.empty() && line.back() == '\r';
+      if (cr) line.pop_back();
+      std::replace(line.begin(), line.end(), '\0', ' ');
+      if (line.size() < 80) line.resize(80, ' ');
+      if (cr) line.push_back('\r');
+      ++padded;
+    }
+    out += line;
+    if (newline) out += '\n';
+    pos = end + 1;
+  }
+  if (padded) text.swap(out);
+  return padded;
+}
+
 struct Radius {
   const char* element;
   double r;
@@ -148,10 +296,17 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
   const int digit_elements = is_cif(path) ? 0 : blank_digit_element_columns(text);
   gemmi::Structure st;
   try {
-    if (is_cif(path))
-      st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
-    else
+    if (is_cif(path)) {
+      gemmi::cif::Document doc = gemmi::cif::read_memory(text.data(), text.size(), path.c_str());
+      check_cif_for_gemmi(doc, path);
+      st = gemmi::make_structure(std::move(doc));
+    } else {
+      check_pdb_for_gemmi(text, path);
+      pad_connection_records(text);
       st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
+    }
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     std::string m = e.what();
     m = m.substr(0, m.find('\n'));

@@ -117,11 +117,19 @@ VolumeImage read_nifti(const std::string& path, int volume) {
   const std::size_t bytes = n3 * std::size_t(hdr->nbyper);
   // Guard before allocating (found by fuzzing): a header may promise far more data than the file holds.
   // A gzip stream inflates at most 1032-fold, so a compressed file bounds the data it can hold as well.
+  // The offset must be a position in the file and the data file must exist to bound it (found by fuzzing: a
+  // vox_offset of NaN becomes the offset -2^31, which made the data "fit" in a 350-byte file, and
+  // 1286x256x1024 floats were allocated before the read failed).
   {
+    if (!hdr->iname) fail(path, "the header names no voxel data file");
+    if (hdr->iname_offset < 0)
+      fail(path, "the voxel data offset (vox_offset) is negative or not a number (" +
+                     std::to_string(hdr->iname_offset) + ")");
     std::error_code ec;
     const std::uintmax_t file_bytes = std::filesystem::file_size(hdr->iname, ec);
+    if (ec) fail(path, std::string("cannot open the voxel data file ") + hdr->iname + " (" + ec.message() + ")");
     const long double need = (long double)hdr->iname_offset + (long double)bytes * (v.volume + 1);
-    const long double can_hold = ec ? need : (long double)file_bytes * (nifti_is_gzfile(hdr->iname) ? 1032 : 1);
+    const long double can_hold = (long double)file_bytes * (nifti_is_gzfile(hdr->iname) ? 1032 : 1);
     if (need > can_hold)
       fail(path, "the voxel data is shorter than dims x datatype promise (" + std::to_string(bytes) +
                      " bytes per volume; the file has " + std::to_string(file_bytes) + ")");
