@@ -204,6 +204,25 @@ Outcome cli(const std::string& args) {
   o.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   return o;
 }
+
+// A refused file: read_molecule throws Error with exit code 2 naming it (and, when `what` is given, saying
+// `what` on one line), and `chokeloops analyze` on it exits 2 with one line.
+void expect_refused(const std::string& path, const std::string& what, const fs::path& out) {
+  try {
+    read_molecule(path);
+    ADD_FAILURE() << path << " was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2) << path;
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    if (!what.empty()) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  }
+  Outcome o = cli("'" + path + "' -o '" + out.string() + "' --quiet");
+  EXPECT_EQ(o.code, 2) << path << ": " << o.err;
+  EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
+}
 }  // namespace
 
 // Each bad file: Error with exit code 2 naming the file, and the CLI exits 2 with one line.
@@ -241,18 +260,7 @@ TEST(MoleculeInput, BadInputExitsTwoWithOneLine) {
       {write("waters.pdb", "HETATM    1  O   HOH A   1      11.104   6.134  -6.504  1.00  0.00           O\n"), "no atoms left"},
       {write("nan.pdb", good + nan_line), "non-finite"},
   };
-  for (auto& [path, what] : cases) {
-    try {
-      read_molecule(path);
-      ADD_FAILURE() << path << " was accepted";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.exit_code, 2) << path;
-      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-    }
-    Outcome o = cli("'" + path + "' -o '" + (dir / "out").string() + "' --quiet");
-    EXPECT_EQ(o.code, 2) << path << ": " << o.err;
-    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
-  }
+  for (auto& [path, what] : cases) expect_refused(path, "", dir / "out");  // `what` names the case only
   fs::remove_all(dir);
 }
 
@@ -309,20 +317,7 @@ TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
       EXPECT_EQ(e.exit_code, 2) << e.what();
     }
   }
-  for (auto& [path, what] : cases) {
-    try {
-      read_molecule(path);
-      ADD_FAILURE() << path << " was accepted";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.exit_code, 2) << path;
-      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
-    }
-    Outcome o = cli("'" + path + "' -o '" + (dir / "out").string() + "' --quiet");
-    EXPECT_EQ(o.code, 2) << path << ": " << o.err;
-    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
-  }
+  for (auto& [path, what] : cases) expect_refused(path, what, dir / "out");
   // within range: an icosahedral assembly and ordinary numbers are read as before
   Molecule m = read_molecule(write("ok.cif", "data_x\n" + assembly("'(1-60)'") + atoms + row1 +
                                                  "ATOM 2147483647 C CB . GLY A 1 1.5 0 0 1 10 -2147483647 A 1\n"));

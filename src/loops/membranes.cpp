@@ -452,15 +452,9 @@ class LoopTracer {
     sorted_faces.erase(std::unique(sorted_faces.begin(), sorted_faces.end()), sorted_faces.end());
     auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
     std::vector<std::array<std::int64_t, 2>> segments;
-    for (int fi : sorted_faces) {
+    for (int fi : sorted_faces) {  // every corner labelled, both labels present (the filter above)
       const auto& F = S_.faces[fi];
-      std::array<std::int8_t, 3> l;
-      bool unknown = false;
-      for (int q = 0; q < 3; ++q) {
-        l[q] = vertex_label.get(F[q]);
-        unknown |= l[q] == 0;
-      }
-      if (unknown || (l[0] == l[1] && l[1] == l[2])) continue;
+      const std::array<std::int8_t, 3> l{vertex_label.get(F[0]), vertex_label.get(F[1]), vertex_label.get(F[2])};
       std::array<std::int64_t, 2> seg;
       int m = 0;
       for (int q = 0; q < 3; ++q)

@@ -26,8 +26,6 @@ class HomologyBasis {
   // Whether the closed edge path `loop` (cyclic vertex list, consecutive vertices joined by mesh edges, on
   // a closed component) is null in H1(component; Z/2).
   bool null_homologous(const std::vector<int>& loop) const;
-  // 2g of the component (the number of leftover edges).
-  int leftover_edges(int component) const { return leftover_start_[component + 1] - leftover_start_[component]; }
 
  private:
   static constexpr std::int32_t kTree = -1, kUnset = -2;
