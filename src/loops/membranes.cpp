@@ -37,6 +37,7 @@
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
+#include "two_lobe_flood.h"
 
 namespace chokeloops {
 
@@ -255,185 +256,31 @@ class LoopTracer {
 
   Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path) const {
     const bool handle = c.side == Side::Handle;
-    const Id s = c.saddle;
-    // "Below" = earlier in the flood's order: the filtration for handles, its reverse for tunnels.
-    auto below = [&](Id v) { return handle ? vertex_less(f_, v, s) : vertex_less(f_, s, v); };
     auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
-    auto sc = cx_.coords(s);
-    std::array<int, 3> lo, hi, n;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, sc[a] - r);
-      hi[a] = std::min(g_.dims[a] - 1, sc[a] + r);
-      n[a] = hi[a] - lo[a] + 1;
+    detail::FloodBox box;
+    switch (detail::flood_two_lobes(g_, cx_, c, r, seed_radius, by_distance, box)) {
+      case detail::FloodOutcome::Grow: return Attempt::Grow;
+      case detail::FloodOutcome::Shrink: return Attempt::Shrink;
+      case detail::FloodOutcome::Flooded: break;
     }
-    const Id base = cx_.vertex(lo[0], lo[1], lo[2]);
-    const Id gy = g_.dims[0], gz = Id(g_.dims[0]) * g_.dims[1];
-    const std::size_t ly = std::size_t(n[0]), lz = std::size_t(n[0]) * n[1];
-    struct Node { Id v; std::uint32_t li; std::array<int, 3> p; };  // p: local coordinates
-    auto node_at = [&](const std::array<int, 3>& p) {
-      return Node{base + p[0] + gy * p[1] + gz * p[2], std::uint32_t(p[0] + ly * p[1] + lz * p[2]), p};
-    };
-    std::array<std::array<int, 3>, 14> offsets;
-    for (int k = 0; k < 14; ++k) offsets[k] = freudenthal::neighbor_offset(k);
-    auto for_neighbours = [&](const Node& x, auto&& fn) {
-      for (const auto& o : offsets) {
-        std::array<int, 3> q{x.p[0] + o[0], x.p[1] + o[1], x.p[2] + o[2]};
-        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n[0] || q[1] >= n[1] || q[2] >= n[2]) continue;
-        fn(node_at(q));
-      }
-    };
-    // One 32-bit word per box vertex, written once in memory order: its zone (bits 0-1: 0 not reached
-    // yet, 1 or 2, kOutside beyond the region), a border bit, and its level in the flood (bits 3-31). The
-    // flood is memory-bound (perf: the reads of a newly met neighbour's zone and value were two cache
-    // misses, two thirds of its time); one word makes it one, and spares a scattered read of the grid.
-    constexpr std::uint32_t kZone = 3, kOutside = 3, kBorder = 4;
-    constexpr int kLevelShift = 3;
-    const double level = g_.voxel_size / 64;
-    const double fs = f_[s];
-    // Flood levels (a bucket queue), quantised to 1/64 voxel; 0 for everything on the seeds' side of the saddle.
-    auto bucket_of = [&](float f) {
-      double d = handle ? (double(f) - fs) : (fs - double(f));  // grows from the saddle toward the surface
-      return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
-    };
-    const std::size_t last_bucket = bucket_of(0.0f) + 1;
-    if (last_bucket >= (std::size_t(1) << (32 - kLevelShift))) throw Error("membrane flood: choke too deep for the level queue");
-    // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
-    static thread_local std::vector<std::uint32_t> cell;
-    cell.resize(lz * n[2]);
-    for (int k = 0; k < n[2]; ++k)
-      for (int j = 0; j < n[1]; ++j) {
-        const float* row = f_ + base + gy * j + gz * k;
-        std::uint32_t* out = cell.data() + ly * std::size_t(j) + lz * std::size_t(k);
-        const bool border_row = k == 0 || j == 0 || k == n[2] - 1 || j == n[1] - 1;
-        for (int i = 0; i < n[0]; ++i) {
-          const bool inside = handle ? row[i] <= 0 : row[i] > 0;
-          std::uint32_t w = inside ? std::uint32_t(std::min(last_bucket, bucket_of(row[i]))) << kLevelShift : kOutside;
-          if (border_row || i == 0 || i == n[0] - 1) w |= kBorder;
-          out[i] = w;
-        }
-      }
-    auto zone = [&](std::uint32_t li) { return cell[li] & kZone; };
-    auto set_zone = [&](std::uint32_t li, std::uint32_t z) { cell[li] = (cell[li] & ~kZone) | z; };
-
-    // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
-    // choke's depth; around a handle they join farther away, which the flood below must not see.
-    const int seed_r = std::min(r, seed_radius);
-    auto in_seed_box = [&](const std::array<int, 3>& p) {
-      for (int a = 0; a < 3; ++a)
-        if (std::abs(lo[a] + p[a] - sc[a]) > seed_r) return false;
-      return true;
-    };
-    std::vector<Node> seeds;
-    for (int side = 0; side < 2; ++side) {
-      std::vector<Node> stack;
-      Id lobe = c.lobes[side];
-      if (lobe == -2) {  // the lobe is the outside of the grid: every border vertex of the box beyond the saddle
-        for (int k = 0; k < n[2]; ++k)
-          for (int j = 0; j < n[1]; ++j)
-            for (int i = 0; i < n[0]; ++i) {
-              std::array<int, 3> gpos{lo[0] + i, lo[1] + j, lo[2] + k};
-              bool border = false;
-              for (int a = 0; a < 3; ++a) border |= gpos[a] == 0 || gpos[a] == g_.dims[a] - 1;
-              Node x = node_at({i, j, k});
-              if (border && below(x.v)) stack.push_back(x);
-            }
-      } else if (lobe >= 0 && below(lobe)) {
-        auto gp = cx_.coords(lobe);
-        std::array<int, 3> p{gp[0] - lo[0], gp[1] - lo[1], gp[2] - lo[2]};
-        if (p[0] >= 0 && p[1] >= 0 && p[2] >= 0 && p[0] < n[0] && p[1] < n[1] && p[2] < n[2]) stack.push_back(node_at(p));
-      }
-      if (stack.empty()) return Attempt::Grow;
-      for (const Node& x : stack) {
-        if (zone(x.li) == std::uint32_t(2 - side)) return Attempt::Shrink;
-        set_zone(x.li, std::uint32_t(side + 1));
-      }
-      while (!stack.empty()) {
-        Node x = stack.back();
-        stack.pop_back();
-        seeds.push_back(x);
-        bool joined = false;
-        for_neighbours(x, [&](const Node& u) {
-          if (!below(u.v) || !in_seed_box(u.p)) return;
-          const std::uint32_t l = zone(u.li);
-          if (l == 0) { set_zone(u.li, std::uint32_t(side + 1)); stack.push_back(u); }
-          else if (l != std::uint32_t(side + 1)) joined = true;
-        });
-        if (joined) return Attempt::Shrink;
-      }
-    }
-
-    // Priority flood through the solid (the outside, for tunnels) in filtration order, by the levels above
-    // (O(1) per vertex; first in, first out within a level, so the result is deterministic); remember the
-    // labelled vertices next to the surface.
-    // The queue holds local indices only (4 bytes, not a 24-byte Node): a big box queues millions.
-    auto node_of = [&](std::uint32_t li) {
-      const int k = int(li / lz), rest = int(li % lz);
-      return node_at({rest % n[0], rest / n[0], k});
-    };
-    std::vector<std::vector<std::uint32_t>> buckets(last_bucket + 1);
-    for (const Node& x : seeds) buckets[0].push_back(x.li);
-    // Vertices off the box's border visit their 14 neighbours by fixed local offsets, without decoding
-    // coordinates or checking bounds; the border bit sends the others down the checked path. Same
-    // neighbour order either way: same labels.
-    std::array<std::int64_t, 14> local_delta;
-    for (int k = 0; k < 14; ++k)
-      local_delta[k] = offsets[k][0] + std::int64_t(ly) * offsets[k][1] + std::int64_t(lz) * offsets[k][2];
-    // Only the shore where the two zones meet can hold interface segments: a surface face whose corners
-    // carry both labels lies in one tetrahedron, whose labelled corners are pairwise neighbours of both
-    // zones. So the zones' contact is marked during the flood (whichever of two touching vertices is
-    // reached second sees the other), and only that part of the shore is labelled below: on a big box
-    // it is a thin sheet, where the whole shore is millions of vertices.
-    static thread_local std::vector<std::uint8_t> contact;
-    contact.assign(cell.size(), 0);
-    std::vector<std::uint32_t> shore_local;
-    for (std::size_t b = 0; b < buckets.size(); ++b) {
-      for (std::size_t q = 0; q < buckets[b].size(); ++q) {
-        const std::uint32_t xl = buckets[b][q];
-        const std::uint32_t lx = cell[xl] & kZone;
-        bool at_shore = false;
-        auto visit = [&](std::uint32_t ul) {
-          std::uint32_t& w = cell[ul];
-          const std::uint32_t lu = w & kZone;
-          if (lu == kOutside) { at_shore = true; return; }
-          if (lu != 0 && lu != lx) { contact[xl] = contact[ul] = 1; return; }
-          if (lu == 0) {
-            w |= lx;
-            if (!by_distance) {
-              buckets[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
-            } else {
-              if (b + 1 == buckets.size()) buckets.emplace_back();
-              buckets[b + 1].push_back(ul);
-            }
-          }
-        };
-        if (cell[xl] & kBorder) {
-          for_neighbours(node_of(xl), [&](const Node& u) { visit(u.li); });
-        } else {
-          for (int k = 0; k < 14; ++k) visit(std::uint32_t(std::int64_t(xl) + local_delta[k]));
-        }
-        if (at_shore) shore_local.push_back(xl);
-      }
-      std::vector<std::uint32_t>().swap(buckets[b]);
-    }
-    std::vector<Node> shore;
-    for (std::uint32_t xl : shore_local)
-      if (contact[xl]) shore.push_back(node_of(xl));
 
     // Label the surface vertices on the crossing edges by their region end.
     // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.
     static thread_local StampedMarks<std::int8_t> vertex_label;
     vertex_label.reset(S_.vertices.size());
     std::vector<int> labelled;
-    for (const Node& x : shore) {
-      std::array<int, 3> gp{lo[0] + x.p[0], lo[1] + x.p[1], lo[2] + x.p[2]};
+    for (std::uint32_t xl : box.shore) {
+      const auto p = box.local(xl);
+      const std::array<int, 3> gp{box.lo[0] + p[0], box.lo[1] + p[1], box.lo[2] + p[2]};
+      const Id x = box.global(xl);
       for (int nb = 0; nb < 14; ++nb) {
         if (!cx_.neighbor_inside(gp, nb)) continue;
-        Id u = x.v + cx_.neighbor_delta(nb);
+        Id u = x + cx_.neighbor_delta(nb);
         if (region(u)) continue;
-        int sv = surface_vertex_on_edge(S_, cx_.edge_id(x.v, u));
+        int sv = surface_vertex_on_edge(S_, cx_.edge_id(x, u));
         if (sv >= 0) {
           if (vertex_label.get(sv) == 0) labelled.push_back(sv);
-          vertex_label.set(sv, std::int8_t(zone(x.li)));
+          vertex_label.set(sv, std::int8_t(box.zone(xl)));
         }
       }
     }

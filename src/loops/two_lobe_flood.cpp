@@ -1,0 +1,182 @@
+// The two-lobe priority flood (two_lobe_flood.h), shared by the loop tracer and the filter.
+#include "two_lobe_flood.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace chokeloops::detail {
+
+FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
+                             bool by_distance, FloodBox& box) {
+  const float* f = grid.values.data();
+  const bool handle = c.side == Side::Handle;
+  const Id s = c.saddle;
+  // "Below" = earlier in the flood's order: the filtration for handles, its reverse for tunnels.
+  auto below = [&](Id v) { return handle ? vertex_less(f, v, s) : vertex_less(f, s, v); };
+  auto sc = cx.coords(s);
+  auto& lo = box.lo;
+  auto& hi = box.hi;
+  auto& n = box.n;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(0, sc[a] - r);
+    hi[a] = std::min(grid.dims[a] - 1, sc[a] + r);
+    n[a] = hi[a] - lo[a] + 1;
+  }
+  const Id base = box.base = cx.vertex(lo[0], lo[1], lo[2]);
+  const Id gy = box.gy = grid.dims[0], gz = box.gz = Id(grid.dims[0]) * grid.dims[1];
+  const std::size_t ly = box.ly = std::size_t(n[0]), lz = box.lz = std::size_t(n[0]) * n[1];
+  struct Node { Id v; std::uint32_t li; std::array<int, 3> p; };  // p: local coordinates
+  auto node_at = [&](const std::array<int, 3>& p) {
+    return Node{base + p[0] + gy * p[1] + gz * p[2], std::uint32_t(p[0] + ly * p[1] + lz * p[2]), p};
+  };
+  std::array<std::array<int, 3>, 14> offsets;
+  for (int k = 0; k < 14; ++k) offsets[k] = freudenthal::neighbor_offset(k);
+  auto for_neighbours = [&](const Node& x, auto&& fn) {
+    for (const auto& o : offsets) {
+      std::array<int, 3> q{x.p[0] + o[0], x.p[1] + o[1], x.p[2] + o[2]};
+      if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n[0] || q[1] >= n[1] || q[2] >= n[2]) continue;
+      fn(node_at(q));
+    }
+  };
+  // One 32-bit word per box vertex, written once in memory order: its zone (bits 0-1: 0 not reached
+  // yet, 1 or 2, kOutside beyond the region), a border bit, and its level in the flood (bits 3-31). The
+  // flood is memory-bound (perf: the reads of a newly met neighbour's zone and value were two cache
+  // misses, two thirds of its time); one word makes it one, and spares a scattered read of the grid.
+  constexpr std::uint32_t kZone = FloodBox::kZone, kOutside = FloodBox::kOutside, kBorder = FloodBox::kBorder;
+  constexpr int kLevelShift = 3;
+  const double level = grid.voxel_size / 64;
+  const double fs = f[s];
+  // Flood levels (a bucket queue), quantised to 1/64 voxel; 0 for everything on the seeds' side of the saddle.
+  auto bucket_of = [&](float value) {
+    double d = handle ? (double(value) - fs) : (fs - double(value));  // grows from the saddle toward the surface
+    return d <= 0 ? std::size_t(0) : std::size_t(d / level) + 1;
+  };
+  const std::size_t last_bucket = bucket_of(0.0f) + 1;
+  if (last_bucket >= (std::size_t(1) << (32 - kLevelShift))) throw Error("membrane flood: choke too deep for the level queue");
+  // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
+  static thread_local std::vector<std::uint32_t> cell;
+  cell.resize(lz * n[2]);
+  box.cell = &cell;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j) {
+      const float* row = f + base + gy * j + gz * k;
+      std::uint32_t* out = cell.data() + ly * std::size_t(j) + lz * std::size_t(k);
+      const bool border_row = k == 0 || j == 0 || k == n[2] - 1 || j == n[1] - 1;
+      for (int i = 0; i < n[0]; ++i) {
+        const bool inside = handle ? row[i] <= 0 : row[i] > 0;
+        std::uint32_t w = inside ? std::uint32_t(std::min(last_bucket, bucket_of(row[i]))) << kLevelShift : kOutside;
+        if (border_row || i == 0 || i == n[0] - 1) w |= kBorder;
+        out[i] = w;
+      }
+    }
+  auto zone = [&](std::uint32_t li) { return cell[li] & kZone; };
+  auto set_zone = [&](std::uint32_t li, std::uint32_t z) { cell[li] = (cell[li] & ~kZone) | z; };
+
+  // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
+  // choke's depth; around a handle they join farther away, which the flood below must not see.
+  const int seed_r = std::min(r, seed_radius);
+  auto in_seed_box = [&](const std::array<int, 3>& p) {
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(lo[a] + p[a] - sc[a]) > seed_r) return false;
+    return true;
+  };
+  std::vector<Node> seeds;
+  for (int side = 0; side < 2; ++side) {
+    std::vector<Node> stack;
+    Id lobe = c.lobes[side];
+    if (lobe == -2) {  // the lobe is the outside of the grid: every border vertex of the box beyond the saddle
+      for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+          for (int i = 0; i < n[0]; ++i) {
+            std::array<int, 3> gpos{lo[0] + i, lo[1] + j, lo[2] + k};
+            bool border = false;
+            for (int a = 0; a < 3; ++a) border |= gpos[a] == 0 || gpos[a] == grid.dims[a] - 1;
+            Node x = node_at({i, j, k});
+            if (border && below(x.v)) stack.push_back(x);
+          }
+    } else if (lobe >= 0 && below(lobe)) {
+      auto gp = cx.coords(lobe);
+      std::array<int, 3> p{gp[0] - lo[0], gp[1] - lo[1], gp[2] - lo[2]};
+      if (p[0] >= 0 && p[1] >= 0 && p[2] >= 0 && p[0] < n[0] && p[1] < n[1] && p[2] < n[2]) stack.push_back(node_at(p));
+    }
+    if (stack.empty()) return FloodOutcome::Grow;
+    for (const Node& x : stack) {
+      if (zone(x.li) == std::uint32_t(2 - side)) return FloodOutcome::Shrink;
+      set_zone(x.li, std::uint32_t(side + 1));
+    }
+    while (!stack.empty()) {
+      Node x = stack.back();
+      stack.pop_back();
+      seeds.push_back(x);
+      bool joined = false;
+      for_neighbours(x, [&](const Node& u) {
+        if (!below(u.v) || !in_seed_box(u.p)) return;
+        const std::uint32_t l = zone(u.li);
+        if (l == 0) { set_zone(u.li, std::uint32_t(side + 1)); stack.push_back(u); }
+        else if (l != std::uint32_t(side + 1)) joined = true;
+      });
+      if (joined) return FloodOutcome::Shrink;
+    }
+  }
+
+  // Priority flood through the solid (the outside, for tunnels) in filtration order, by the levels above
+  // (O(1) per vertex; first in, first out within a level, so the result is deterministic); remember the
+  // labelled vertices next to the surface.
+  // The queue holds local indices only (4 bytes, not a 24-byte Node): a big box queues millions.
+  auto node_of = [&](std::uint32_t li) {
+    const int k = int(li / lz), rest = int(li % lz);
+    return node_at({rest % n[0], rest / n[0], k});
+  };
+  std::vector<std::vector<std::uint32_t>> buckets(last_bucket + 1);
+  for (const Node& x : seeds) buckets[0].push_back(x.li);
+  // Vertices off the box's border visit their 14 neighbours by fixed local offsets, without decoding
+  // coordinates or checking bounds; the border bit sends the others down the checked path. Same
+  // neighbour order either way: same labels.
+  std::array<std::int64_t, 14> local_delta;
+  for (int k = 0; k < 14; ++k)
+    local_delta[k] = offsets[k][0] + std::int64_t(ly) * offsets[k][1] + std::int64_t(lz) * offsets[k][2];
+  // Only the shore where the two zones meet can hold interface segments: a surface face whose corners
+  // carry both labels lies in one tetrahedron, whose labelled corners are pairwise neighbours of both
+  // zones. So the zones' contact is marked during the flood (whichever of two touching vertices is
+  // reached second sees the other), and only that part of the shore is labelled below: on a big box
+  // it is a thin sheet, where the whole shore is millions of vertices.
+  static thread_local std::vector<std::uint8_t> contact;
+  contact.assign(cell.size(), 0);
+  box.contact = &contact;
+  std::vector<std::uint32_t> shore_local;
+  for (std::size_t b = 0; b < buckets.size(); ++b) {
+    for (std::size_t q = 0; q < buckets[b].size(); ++q) {
+      const std::uint32_t xl = buckets[b][q];
+      const std::uint32_t lx = cell[xl] & kZone;
+      bool at_shore = false;
+      auto visit = [&](std::uint32_t ul) {
+        std::uint32_t& w = cell[ul];
+        const std::uint32_t lu = w & kZone;
+        if (lu == kOutside) { at_shore = true; return; }
+        if (lu != 0 && lu != lx) { contact[xl] = contact[ul] = 1; return; }
+        if (lu == 0) {
+          w |= lx;
+          if (!by_distance) {
+            buckets[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
+          } else {
+            if (b + 1 == buckets.size()) buckets.emplace_back();
+            buckets[b + 1].push_back(ul);
+          }
+        }
+      };
+      if (cell[xl] & kBorder) {
+        for_neighbours(node_of(xl), [&](const Node& u) { visit(u.li); });
+      } else {
+        for (int k = 0; k < 14; ++k) visit(std::uint32_t(std::int64_t(xl) + local_delta[k]));
+      }
+      if (at_shore) shore_local.push_back(xl);
+    }
+    std::vector<std::uint32_t>().swap(buckets[b]);
+  }
+  box.shore.clear();
+  for (std::uint32_t xl : shore_local)
+    if (contact[xl]) box.shore.push_back(xl);
+  return FloodOutcome::Flooded;
+}
+
+}  // namespace chokeloops::detail

@@ -1,0 +1,50 @@
+#pragma once
+// Private to src/loops: the two-lobe priority flood of a choke (membranes.cpp says why this construction).
+// The two pieces of {below the saddle} that the choke simplex joins seed zones 1 and 2; the flood grows them
+// through the region (the solid for handles, the outside for tunnels) in filtration order inside a box
+// around the saddle. Their contact is the membrane; where it meets the surface is the loop. The loop
+// tracer reads the contact at the shore, the filter the whole contact sheet.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "chokeloops/topology/chokes.h"
+#include "chokeloops/topology/complex.h"
+
+namespace chokeloops::detail {
+
+enum class FloodOutcome { Flooded, Grow, Shrink };  // Grow: a lobe is not in the box; Shrink: the seeds touch
+
+// The box of one flood and its labels. The per-vertex arrays belong to the calling thread and are reused
+// by its next flood: read what is needed before flooding again on the same thread.
+struct FloodBox {
+  static constexpr std::uint32_t kZone = 3, kOutside = 3, kBorder = 4;
+  std::array<int, 3> lo{}, hi{}, n{};  // grid coordinates of the box (inclusive) and its size
+  Id base = 0;                         // grid id of local (0, 0, 0)
+  Id gy = 0, gz = 0;                   // grid strides
+  std::size_t ly = 0, lz = 0;          // local strides
+  const std::vector<std::uint32_t>* cell = nullptr;  // per box vertex: zone (bits 0-1), border bit, level
+  const std::vector<std::uint8_t>* contact = nullptr;  // 1: a neighbour carries the other zone
+  std::vector<std::uint32_t> shore;    // labelled box vertices in contact, with a neighbour outside the region
+
+  std::uint32_t zone(std::uint32_t li) const { return (*cell)[li] & kZone; }
+  bool on_border(std::uint32_t li) const { return (*cell)[li] & kBorder; }
+  bool in_contact(std::uint32_t li) const { return (*contact)[li] != 0; }
+  std::array<int, 3> local(std::uint32_t li) const {
+    const int k = int(li / lz), rest = int(li % lz);
+    return {rest % n[0], rest / n[0], k};
+  }
+  Id global(std::uint32_t li) const {
+    const auto p = local(li);
+    return base + p[0] + gy * p[1] + gz * p[2];
+  }
+  std::size_t size() const { return lz * std::size_t(n[2]); }
+};
+
+// Floods the box of half-size `r` around the choke's saddle; the seed pieces are looked for within
+// `seed_radius` of it. by_distance: grow the zones by steps from the seeds (their bisector) instead of in
+// filtration order. Throws Error when the choke is too deep for the level queue.
+FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
+                             bool by_distance, FloodBox& box);
+
+}  // namespace chokeloops::detail
