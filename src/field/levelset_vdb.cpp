@@ -94,45 +94,6 @@ openvdb::CoordBBox crossing_bbox(const openvdb::FloatGrid& g) {
       });
 }
 
-// Replaces the values of a dense grid by the signed distance to the zero level set its signs define.
-// Every vertex with an axis neighbour of the other sign becomes a site whose surface point is one Newton
-// step onto the level set (x - phi grad/|grad|^2, central differences), or the nearest crossing along its
-// axis edges where that step is unreliable (flat gradient, or a step longer than 1.5 voxels); the exact
-// feature transform of levelset_edt.cpp then gives every vertex the distance to the best of these
-// points. First order near the surface and exact to the sampled points far from it, unlike fast
-// sweeping, whose first-order error accumulates with the distance; and ~5x faster (tangle cube 257^3).
-void redistance_from_signs(ScalarGrid& g, const std::vector<std::uint8_t>& known = {}) {
-  const int nx = g.dims[0], ny = g.dims[1];
-  const float* f = g.values.data();
-  const std::int64_t st[3] = {1, nx, std::int64_t(nx) * ny};
-  const std::vector<detail::Site> sites = detail::collect_sites(g, [&](int i, int j, int k, std::int64_t v, detail::Site& site) {
-    const int ijk[3] = {i, j, k};
-    int best_axis, best_dir;
-    double best_t;
-    if (!detail::nearest_edge_crossing(g, v, ijk, best_axis, best_dir, best_t)) return false;
-    const float fv = f[v];
-    double grad[3];
-    for (int a = 0; a < 3; ++a) {
-      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] < g.dims[a] - 1;
-      const float lo = has_lo ? f[v - st[a]] : fv, hi = has_hi ? f[v + st[a]] : fv;
-      grad[a] = double(hi - lo) / double(std::max(1, int(has_lo) + int(has_hi)));  // central, one-sided at the border
-    }
-    const double g2 = grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2];
-    double p[3] = {double(i), double(j), double(k)};
-    bool newton = g2 > 0;
-    if (newton) {
-      const double step = double(fv) / g2;
-      const double len2 = step * step * g2;
-      newton = len2 <= 1.5 * 1.5;
-      if (newton)
-        for (int a = 0; a < 3; ++a) p[a] -= step * grad[a];
-    }
-    if (!newton) p[best_axis] += best_t * best_dir;
-    site = {v, {float(p[0]), float(p[1]), float(p[2])}};
-    return true;
-  });
-  detail::complete_by_feature_transform(g, known, sites);
-}
 
 // A level set can be a distance near its surface only: min/max (CSG) of exact distances, a narrow band
 // grown by another tool. Its eikonal residual is fine almost everywhere, so the one test that catches it is
@@ -178,6 +139,46 @@ void replace_values_that_are_not_the_distance(LevelSetResult& res, const std::ve
 }
 
 }  // namespace
+
+// Replaces the values of a dense grid by the signed distance to the zero level set its signs define.
+// Every vertex with an axis neighbour of the other sign becomes a site whose surface point is one Newton
+// step onto the level set (x - phi grad/|grad|^2, central differences), or the nearest crossing along its
+// axis edges where that step is unreliable (flat gradient, or a step longer than 1.5 voxels); the exact
+// feature transform of levelset_edt.cpp then gives every vertex the distance to the best of these
+// points. First order near the surface and exact to the sampled points far from it, unlike fast
+// sweeping, whose first-order error accumulates with the distance; and ~5x faster (tangle cube 257^3).
+void redistance_from_signs(ScalarGrid& g, const std::vector<std::uint8_t>& known) {
+  const int nx = g.dims[0], ny = g.dims[1];
+  const float* f = g.values.data();
+  const std::int64_t st[3] = {1, nx, std::int64_t(nx) * ny};
+  const std::vector<detail::Site> sites = detail::collect_sites(g, [&](int i, int j, int k, std::int64_t v, detail::Site& site) {
+    const int ijk[3] = {i, j, k};
+    int best_axis, best_dir;
+    double best_t;
+    if (!detail::nearest_edge_crossing(g, v, ijk, best_axis, best_dir, best_t)) return false;
+    const float fv = f[v];
+    double grad[3];
+    for (int a = 0; a < 3; ++a) {
+      const bool has_lo = ijk[a] > 0, has_hi = ijk[a] < g.dims[a] - 1;
+      const float lo = has_lo ? f[v - st[a]] : fv, hi = has_hi ? f[v + st[a]] : fv;
+      grad[a] = double(hi - lo) / double(std::max(1, int(has_lo) + int(has_hi)));  // central, one-sided at the border
+    }
+    const double g2 = grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2];
+    double p[3] = {double(i), double(j), double(k)};
+    bool newton = g2 > 0;
+    if (newton) {
+      const double step = double(fv) / g2;
+      const double len2 = step * step * g2;
+      newton = len2 <= 1.5 * 1.5;
+      if (newton)
+        for (int a = 0; a < 3; ++a) p[a] -= step * grad[a];
+    }
+    if (!newton) p[best_axis] += best_t * best_dir;
+    site = {v, {float(p[0]), float(p[1]), float(p[2])}};
+    return true;
+  });
+  detail::complete_by_feature_transform(g, known, sites);
+}
 
 LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const LevelSetOptions& o, const std::string& name) {
   ensure_openvdb_initialized();

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <type_traits>
+#include <limits>
 #include <fstream>
 
 #include <nifti/nifti2_io.h>
@@ -404,6 +406,82 @@ void write_scalar_volume(const VolumeImage& image, const std::string& path) {
   if (nifti_set_filenames(out.get(), path.c_str(), 0, 1)) throw Error("cannot name " + path, 3);
   out->data = bytes.data();
   nifti_image_write(out.get());
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error("cannot write " + path, 3);
+}
+
+namespace {
+
+// Stores `value` (scaled units) into raw element `i` of type T: the inverse of the reader's scaling,
+// rounded and clamped for integer types.
+template <class T>
+void store(void* data, std::size_t i, double value) {
+  if constexpr (std::is_integral_v<T>) {
+    const double r = std::round(value);
+    const double lo = double(std::numeric_limits<T>::lowest()), hi = double(std::numeric_limits<T>::max());
+    static_cast<T*>(data)[i] = T(std::min(hi, std::max(lo, r)));
+  } else {
+    static_cast<T*>(data)[i] = T(value);
+  }
+}
+
+bool store_by_nifti_type(int type, void* data, std::size_t i, double v) {
+  switch (type) {
+    case DT_UINT8: store<std::uint8_t>(data, i, v); return true;
+    case DT_INT8: store<std::int8_t>(data, i, v); return true;
+    case DT_UINT16: store<std::uint16_t>(data, i, v); return true;
+    case DT_INT16: store<std::int16_t>(data, i, v); return true;
+    case DT_UINT32: store<std::uint32_t>(data, i, v); return true;
+    case DT_INT32: store<std::int32_t>(data, i, v); return true;
+    case DT_UINT64: store<std::uint64_t>(data, i, v); return true;
+    case DT_INT64: store<std::int64_t>(data, i, v); return true;
+    case DT_FLOAT32: store<float>(data, i, v); return true;
+    case DT_FLOAT64: store<double>(data, i, v); return true;
+    default: return false;
+  }
+}
+
+bool store_by_nrrd_type(int type, void* data, std::size_t i, double v) {
+  switch (type) {
+    case nrrdTypeUChar: store<unsigned char>(data, i, v); return true;
+    case nrrdTypeChar: store<signed char>(data, i, v); return true;
+    case nrrdTypeUShort: store<unsigned short>(data, i, v); return true;
+    case nrrdTypeShort: store<short>(data, i, v); return true;
+    case nrrdTypeUInt: store<unsigned int>(data, i, v); return true;
+    case nrrdTypeInt: store<int>(data, i, v); return true;
+    case nrrdTypeULLong: store<unsigned long long>(data, i, v); return true;
+    case nrrdTypeLLong: store<long long>(data, i, v); return true;
+    case nrrdTypeFloat: store<float>(data, i, v); return true;
+    case nrrdTypeDouble: store<double>(data, i, v); return true;
+    default: return false;
+  }
+}
+
+}  // namespace
+
+void write_edited_volume(const VolumeImage& like, const std::vector<std::pair<std::int64_t, double>>& changes,
+                         const std::string& path) {
+  const std::size_t offset = std::size_t(like.volume) * std::size_t(like.voxel_count());
+  if (like.format == "nrrd") {
+    if (!is_nrrd(path)) throw Error(path + ": the input is NRRD; write the filtered image as .nrrd");
+    std::shared_ptr<Nrrd> nrrd(nrrdNew(), [](Nrrd* p) { nrrdNuke(p); });
+    if (nrrdLoad(nrrd.get(), like.path.c_str(), nullptr)) throw Error(like.path + ": cannot read again: " + biff_message());
+    for (const auto& [i, v] : changes)
+      if (!store_by_nrrd_type(nrrd->type, nrrd->data, offset + std::size_t(i), v))
+        throw Error(like.path + ": cannot write this NRRD type back");
+    save_nrrd_gzip(nrrd.get(), path);
+    return;
+  }
+  if (!is_nifti(path)) throw Error(path + ": the input is NIfTI; write the filtered image as .nii or .nii.gz");
+  std::shared_ptr<nifti_image> nim(nifti_image_read(like.path.c_str(), 1), [](nifti_image* p) { if (p) nifti_image_free(p); });
+  if (!nim || !nim->data) throw Error(like.path + ": cannot read again");
+  const double slope = nim->scl_slope != 0 && std::isfinite(nim->scl_slope) ? nim->scl_slope : 1.0;
+  const double inter = std::isfinite(nim->scl_inter) && nim->scl_slope != 0 ? nim->scl_inter : 0.0;
+  for (const auto& [i, v] : changes)
+    if (!store_by_nifti_type(nim->datatype, nim->data, offset + std::size_t(i), (v - inter) / slope))
+      throw Error(like.path + ": cannot write this NIfTI datatype back");
+  if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1)) throw Error("cannot name " + path, 3);
+  nifti_image_write(nim.get());
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error("cannot write " + path, 3);
 }

@@ -81,6 +81,8 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
     return true;
   };
   std::vector<Node> seeds;
+  box.seed_centroid = {};
+  box.seed_count = {0, 0};
   for (int side = 0; side < 2; ++side) {
     std::vector<Node> stack;
     Id lobe = c.lobes[side];
@@ -108,6 +110,8 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
       Node x = stack.back();
       stack.pop_back();
       seeds.push_back(x);
+      for (int a = 0; a < 3; ++a) box.seed_centroid[side][a] += lo[a] + x.p[a];
+      box.seed_count[side] += 1;
       bool joined = false;
       for_neighbours(x, [&](const Node& u) {
         if (!below(u.v) || !in_seed_box(u.p)) return;
@@ -173,6 +177,8 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
     }
     std::vector<std::uint32_t>().swap(buckets[b]);
   }
+  for (int side = 0; side < 2; ++side)
+    for (int a = 0; a < 3; ++a) box.seed_centroid[side][a] /= double(std::max<std::size_t>(1, box.seed_count[side]));
   box.shore.clear();
   for (std::uint32_t xl : shore_local)
     if (contact[xl]) box.shore.push_back(xl);

@@ -26,6 +26,8 @@ struct FloodBox {
   const std::vector<std::uint32_t>* cell = nullptr;  // per box vertex: zone (bits 0-1), border bit, level
   const std::vector<std::uint8_t>* contact = nullptr;  // 1: a neighbour carries the other zone
   std::vector<std::uint32_t> shore;    // labelled box vertices in contact, with a neighbour outside the region
+  std::array<std::array<double, 3>, 2> seed_centroid{};  // of each seed piece, grid coordinates
+  std::array<std::size_t, 2> seed_count{0, 0};
 
   std::uint32_t zone(std::uint32_t li) const { return (*cell)[li] & kZone; }
   bool on_border(std::uint32_t li) const { return (*cell)[li] & kBorder; }

@@ -59,7 +59,8 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
   out.min_persistence_tunnel = params.min_persistence.resolve(out.R_out);
   out.components = int(diagram.essential.size());
 
-  for (const PersistencePair& p : diagram.pairs) {
+  for (std::size_t pi = 0; pi < diagram.pairs.size(); ++pi) {
+    const PersistencePair& p = diagram.pairs[pi];
     const double b = p.birth, d = p.death;
     Choke c;
     c.birth = b;
@@ -71,6 +72,7 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
       // One handle and one tunnel of the genus. As in the paper (section 3.2), a generator's persistence is
       // how long the side it cuts lives on: the handle's until the deepest core (R_in) is reached, the
       // tunnel's until the box is filled (R_out). Reported, never filtered.
+      c.pair = int(pi);
       Choke h = c;
       h.side = Side::Handle;
       h.kind = Kind::Generator;

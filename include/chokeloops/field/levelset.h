@@ -67,6 +67,11 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
 LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr grid, const LevelSetOptions& options = {},
                                  const std::string& name = "grid");
 
+// Replaces every value by the signed distance to the zero level set the grid's signs define (the crossings
+// along grid edges, refined by a Newton step), exact to those points far from the surface. Vertices with
+// known[v] != 0 keep their values (empty: none do).
+void redistance_from_signs(ScalarGrid& grid, const std::vector<std::uint8_t>& known = {});
+
 // Default padding: max(10% of the longest side of the object, 4 voxels). Enough for the outside to
 // stay connected around the object and for tunnel/pocket mouths at the bbox to close inside the box.
 double default_margin(double longest_side, double voxel_size);

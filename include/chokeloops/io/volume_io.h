@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace chokeloops {
@@ -52,6 +53,13 @@ void write_label_volume(const VolumeImage& like, const std::vector<std::int32_t>
 // image.datatype: "uint8", "int16", "int32", "float32") as NIfTI-1 (.nii/.nii.gz) or NRRD (.nrrd, LPS taken
 // as the affine's space when image.convention is "LPS", else RAS). For tests, benchmarks and tools.
 void write_scalar_volume(const VolumeImage& image, const std::string& path);
+
+// Writes the image `like` was read from (every volume of it, its header and datatype) to `path`, in the same
+// format, with the voxels in `changes` (linear index in `like`'s 3D volume, new value in the image's scaled
+// units) set in the volume `like` holds; every other byte of data unchanged. Throws Error (2) when `path` is
+// not of the input's format, (3) when it cannot be written.
+void write_edited_volume(const VolumeImage& like, const std::vector<std::pair<std::int64_t, double>>& changes,
+                         const std::string& path);
 
 // The file name a label volume called `stem` gets next to an input of this format: "loops.nii.gz",
 // "loops.nrrd".

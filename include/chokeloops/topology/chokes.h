@@ -41,6 +41,7 @@ struct Choke {
   Id saddle = -1;                     // its highest vertex
   std::array<Id, 2> lobes{-1, -1};    // one vertex on each side of the membrane (-2: outside the box)
   std::array<double, 3> point{0, 0, 0};  // choke point: centroid of the choke simplex, world coordinates
+  int pair = -1;                      // generators: index of their pair in the diagram (a handle and a tunnel share it)
 };
 
 struct ChokeSet {

@@ -1,0 +1,31 @@
+#pragma once
+// The grid vertices of a choke's membrane: one shore of the two-lobe flood's contact sheet (membranes.h),
+// the disc across a handle (in the solid) or across a tunnel (in the outside). Flipping their sign cuts the
+// handle or fills the tunnel; `chokeloops filter` does that, and label volumes draw the membrane with them.
+#include <string>
+#include <vector>
+
+#include "chokeloops/loops/membranes.h"
+#include "chokeloops/topology/chokes.h"
+
+namespace chokeloops {
+
+struct MembraneVoxels {
+  bool found = false;
+  std::string note;      // why not found
+  std::vector<Id> shore;  // grid vertices, ascending: the smaller shore of the sheet through the choke
+  int box_radius = 0;    // half-size in voxels of the box the sheet closed in
+};
+
+// Sheet: the flood's contact sheet through the choke's saddle (follows a bent handle). Plane: the piece
+// through the saddle of a digital plane across the line between the two seed pieces, thick enough that no
+// Freudenthal edge jumps it (a straight cut; on a flat core, where the filtration order spreads the two
+// zones erratically and their contact can wrap around, it still crosses the handle once).
+// Saddle: the choke's saddle vertex alone, for pairs thinner than a voxel (noise), where neither closes.
+enum class MembraneShape { Sheet, Plane, Saddle };
+
+// The membrane of the choke, grown in boxes (LoopOptions::box_factor, box_margin) until it closes inside one.
+MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
+                               MembraneShape shape = MembraneShape::Sheet);
+
+}  // namespace chokeloops

@@ -1,0 +1,330 @@
+// The filter: rounds of (persistence -> select pairs -> membranes -> edits -> check).
+//
+// Why membranes. A pair of the genus is removed by changing the side of as few vertices as possible
+// where the handle (or the tunnel) is narrowest. The two-lobe flood's contact sheet at the handle
+// generator is a disc across the handle through its narrowest section; one shore of it separates the
+// two lobes, so moving it out of the solid cuts the handle and nothing else (and the same in the
+// outside fills a tunnel). The values near an edit become the distance to the new surface where that is
+// nearer than the old one; every other value stays bit-identical.
+//
+// Why rounds and a check. Persistence decides what an edit did: after a batch, the genus must have
+// dropped by the batch's size with the components and sealed cavities unchanged. A batch that fails is
+// split in halves and each half checked again, so one edit that does something else (a membrane on a
+// flat core, two edits that touch) is undone and noted while the others stay. Pairs selected but left
+// (e.g. their membrane did not close) are asked again in the next round, from the edited field, with
+// the other membrane shape (a plane on odd rounds, the flood's sheet on even ones).
+#include "chokeloops/filter/filter.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "chokeloops/field/levelset.h"
+#include "chokeloops/loops/membrane_voxels.h"
+#include "chokeloops/topology/complex.h"
+
+namespace chokeloops {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+struct Analysis {
+  ChokeSet chokes;
+  FilterSummary summary;
+};
+
+Analysis analyse(const ScalarGrid& grid) {
+  Analysis a;
+  const PersistenceDiagram diagram = lower_star_persistence(grid);
+  ChokeParameters only_generators;
+  only_generators.d_max = Threshold{0, false};
+  only_generators.min_persistence = Threshold{1e30, false};
+  a.chokes = find_chokes(grid, diagram, only_generators);
+  a.summary = {a.chokes.handle_generators, a.chokes.components, a.chokes.sealed_cavities};
+  return a;
+}
+
+struct GenusPair {
+  Choke handle, tunnel;
+  double persistence = 0;  // d - b
+};
+
+std::vector<GenusPair> genus_pairs(const ChokeSet& chokes) {
+  std::map<int, GenusPair> by_pair;
+  for (const Choke& c : chokes.chokes) {
+    if (c.kind != Kind::Generator) continue;
+    GenusPair& p = by_pair[c.pair];
+    (c.side == Side::Handle ? p.handle : p.tunnel) = c;
+    p.persistence = c.death - c.birth;
+  }
+  std::vector<GenusPair> pairs;
+  for (auto& [index, p] : by_pair) pairs.push_back(p);
+  // Most persistent first; ties by the handle's simplex, so the order is the same on every run.
+  std::stable_sort(pairs.begin(), pairs.end(), [](const GenusPair& a, const GenusPair& b) {
+    if (a.persistence != b.persistence) return a.persistence > b.persistence;
+    return a.handle.simplex < b.handle.simplex;
+  });
+  return pairs;
+}
+
+std::string where(const Choke& c) {
+  std::ostringstream s;
+  s.precision(4);
+  s << "(" << c.point[0] << ", " << c.point[1] << ", " << c.point[2] << ")";
+  return s.str();
+}
+
+// The vertices an edit touches (its voxels and their neighbourhood of a depth plus two voxels), and the
+// values they had, so that a failed check can put them back.
+struct Undo {
+  std::vector<std::pair<Id, float>> old_values;
+};
+
+// Moves every edit's voxels to their new side and gives the vertices around them the distance to the new
+// surface where it is nearer than the old one. Returns what to restore.
+Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
+  Undo undo;
+  if (edits.empty()) return undo;
+  FreudenthalComplex cx(grid.dims);
+  std::array<int, 3> lo{grid.dims[0], grid.dims[1], grid.dims[2]}, hi{-1, -1, -1};
+  struct Box { std::array<int, 3> lo, hi; };
+  std::vector<Box> boxes;
+  for (const FilterEdit& e : edits) {
+    Box b{{grid.dims[0], grid.dims[1], grid.dims[2]}, {-1, -1, -1}};
+    for (Id v : e.voxels) {
+      const auto p = cx.coords(v);
+      for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], p[a]), b.hi[a] = std::max(b.hi[a], p[a]);
+    }
+    for (int a = 0; a < 3; ++a) {
+      const int m = int(std::ceil(e.depth / grid.h(a))) + 2;
+      b.lo[a] = std::max(0, b.lo[a] - m);
+      b.hi[a] = std::min(grid.dims[a] - 1, b.hi[a] + m);
+      lo[a] = std::min(lo[a], b.lo[a]);
+      hi[a] = std::max(hi[a], b.hi[a]);
+    }
+    boxes.push_back(b);
+  }
+  // The union of the neighbourhoods, redistanced from the new signs on the box that holds them all.
+  ScalarGrid sub;
+  for (int a = 0; a < 3; ++a) sub.dims[a] = hi[a] - lo[a] + 1;
+  sub.voxel_size = grid.voxel_size;
+  sub.spacing = grid.spacing;
+  sub.origin = grid.world(lo);
+  sub.values.resize(std::size_t(sub.vertex_count()));
+  auto sub_index = [&](const std::array<int, 3>& p) { return sub.index(p[0] - lo[0], p[1] - lo[1], p[2] - lo[2]); };
+  tbb::parallel_for(0, sub.dims[2], [&](int k) {
+    for (int j = 0; j < sub.dims[1]; ++j)
+      for (int i = 0; i < sub.dims[0]; ++i) sub.values[sub.index(i, j, k)] = grid.values[grid.index(lo[0] + i, lo[1] + j, lo[2] + k)];
+  });
+  std::vector<std::uint8_t> flipped(sub.values.size(), 0);
+  // A flipped vertex sits half a voxel past the new surface, as a mask's boundary does between voxels.
+  const float half = float(0.5 * grid.voxel_size);
+  for (const FilterEdit& e : edits)
+    for (Id v : e.voxels) {
+      const Id s = sub_index(cx.coords(v));
+      sub.values[s] = e.side == Side::Handle ? half : -half;
+      flipped[s] = 1;
+    }
+  ScalarGrid exact = sub;
+  redistance_from_signs(exact);
+  std::vector<std::uint8_t> touched(sub.values.size(), 0);
+  for (const Box& b : boxes)
+    for (int k = b.lo[2]; k <= b.hi[2]; ++k)
+      for (int j = b.lo[1]; j <= b.hi[1]; ++j)
+        for (int i = b.lo[0]; i <= b.hi[0]; ++i) touched[sub_index({i, j, k})] = 1;
+  for (int k = 0; k < sub.dims[2]; ++k)
+    for (int j = 0; j < sub.dims[1]; ++j)
+      for (int i = 0; i < sub.dims[0]; ++i) {
+        const Id s = sub.index(i, j, k);
+        if (!touched[s]) continue;
+        const Id v = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
+        const float old = grid.values[v], near = exact.values[s];
+        float value = old;
+        if (flipped[s]) value = near;
+        else if ((near < 0) == (old < 0) && std::abs(near) < std::abs(old)) value = near;
+        if (value == old) continue;
+        undo.old_values.push_back({v, old});
+        grid.values[v] = value;
+      }
+  return undo;
+}
+
+void restore(ScalarGrid& grid, const Undo& undo) {
+  for (auto it = undo.old_values.rbegin(); it != undo.old_values.rend(); ++it) grid.values[it->first] = it->second;
+}
+
+// A batch must leave the components and sealed cavities as they were and lower the genus, never below `floor`
+// (the pairs --keep-genus keeps). It may lower it by more than its size: an edit can take tiny pairs along
+// (two handles sharing a voxel go together); the report counts pairs removed from the genus itself.
+bool as_expected(const FilterSummary& got, const FilterSummary& before, int floor) {
+  return got.components == before.components && got.cavities == before.cavities && got.genus < before.genus &&
+         got.genus >= std::max(floor, 0);
+}
+
+// Applies `edits` and keeps those whose check passes (halves of a failed batch are checked on their own);
+// returns the kept ones and the summary of the field they leave.
+// `now` is the analysis of the field as it stands (updated with every batch kept).
+std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, int floor,
+                                      std::vector<std::string>& notes) {
+  if (edits.empty()) return {};
+  const FilterSummary current = now.summary;
+  const Undo undo = apply_edits(grid, edits);
+  Analysis after = analyse(grid);
+  const FilterSummary got = after.summary;
+  if (as_expected(got, current, floor)) {
+    now = std::move(after);
+    return edits;
+  }
+  restore(grid, undo);
+  if (edits.size() == 1) {
+    const FilterEdit& e = edits[0];
+    std::ostringstream s;
+    s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at ("
+      << e.point[0] << ", " << e.point[1] << ", " << e.point[2] << ") left genus " << got.genus << ", " << got.components
+      << " components, " << got.cavities << " cavities (expected a genus below " << current.genus << ", " << current.components << ", "
+      << current.cavities << "): undone";
+    notes.push_back(s.str());
+    return {};
+  }
+  const std::size_t half = edits.size() / 2;
+  std::vector<FilterEdit> second(std::make_move_iterator(edits.begin() + std::ptrdiff_t(half)), std::make_move_iterator(edits.end()));
+  edits.resize(half);
+  std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, floor, notes);
+  std::vector<FilterEdit> more = apply_checked(grid, std::move(second), now, floor, notes);
+  kept.insert(kept.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
+  return kept;
+}
+
+}  // namespace
+
+FilterSummary topology_summary(const ScalarGrid& grid) { return analyse(grid).summary; }
+
+FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const ProgressFn& progress) {
+  validate_grid(grid);
+  if (!options.has_max_depth && !options.has_max_persistence && options.keep_genus < 0)
+    throw Error("nothing to select: give --max-depth, --max-persistence or --keep-genus");
+  FilterReport report;
+  const auto t_start = Clock::now();
+  const std::vector<float> original = grid.values;
+  Analysis first = analyse(grid);
+  report.timings_ms["persistence"] = ms_since(t_start);
+  report.before = first.summary;
+  report.R_in = first.chokes.R_in;
+  report.R_out = first.chokes.R_out;
+  if (options.keep_genus > report.before.genus)
+    throw Error("--keep-genus " + std::to_string(options.keep_genus) + " is more than the genus of the input (" +
+                std::to_string(report.before.genus) + "): nothing to remove");
+  const double d_cut = options.max_depth.resolve(report.R_in), d_fill = options.max_depth.resolve(report.R_out);
+  const double p_max = options.max_persistence.resolve(report.R_in + report.R_out);
+  const double voxel_volume = grid.h(0) * grid.h(1) * grid.h(2);
+  Analysis now = std::move(first);
+  double t_membranes = 0, t_edits = 0;
+  std::vector<std::string> unresolved, undone;
+  int idle_rounds = 0;
+  for (int round = 1; round <= options.max_rounds; ++round) {
+    if (progress && !progress("filter", double(round - 1) / options.max_rounds)) throw Error("interrupted", 3);
+    const std::vector<GenusPair> pairs = genus_pairs(now.chokes);
+    struct Candidate {
+      const GenusPair* pair;
+      bool cut, fill;
+      MembraneVoxels cut_voxels, fill_voxels;
+    };
+    std::vector<Candidate> candidates;
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      if (options.keep_genus >= 0 && int(i) < options.keep_genus) continue;
+      const GenusPair& p = pairs[i];
+      if (options.has_max_persistence && p.persistence > p_max) continue;
+      const bool cut = options.mode != FilterMode::Fill && (!options.has_max_depth || p.handle.depth <= d_cut);
+      const bool fill = options.mode != FilterMode::Cut && (!options.has_max_depth || p.tunnel.depth <= d_fill);
+      if (cut || fill) candidates.push_back({&p, cut, fill, {}, {}});
+    }
+    if (round == 1) report.selected = int(candidates.size());
+    unresolved.clear();
+    if (candidates.empty()) {
+      undone.clear();
+      break;
+    }
+    report.rounds = round;
+    const auto t_m = Clock::now();
+    // Odd rounds cut straight across (a plane), even rounds along the flood's contact sheet.
+    const MembraneShape shape = round % 2 == 1 ? MembraneShape::Sheet : MembraneShape::Plane;
+    tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {
+      Candidate& c = candidates[job / 2];
+      const bool cut = job % 2 == 0;
+      if (!(cut ? c.cut : c.fill)) return;
+      MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
+      const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
+      for (MembraneShape s : {shape, shape == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane, MembraneShape::Saddle}) {
+        if (s == MembraneShape::Saddle && g.depth >= 0.5 * grid.voxel_size) break;
+        try {
+          m = membrane_voxels(grid, g, options.membrane, s);
+        } catch (const Error& e) {
+          m.found = false;
+          m.note = e.what();
+        }
+        if (m.found) break;
+      }
+      if (m.found && options.can_change)
+        for (Id v : m.shore)
+          if (!options.can_change(v)) {
+            m.found = false;
+            m.note = "its membrane would change voxels that may not change";
+            break;
+          }
+    });
+    t_membranes += ms_since(t_m);
+    std::vector<FilterEdit> edits;
+    for (const Candidate& c : candidates) {
+      const MembraneVoxels* pick = nullptr;
+      Side side = Side::Handle;
+      const bool cut_ok = c.cut && c.cut_voxels.found, fill_ok = c.fill && c.fill_voxels.found;
+      if (cut_ok && (!fill_ok || c.cut_voxels.shore.size() <= c.fill_voxels.shore.size())) pick = &c.cut_voxels;
+      else if (fill_ok) pick = &c.fill_voxels, side = Side::Tunnel;
+      if (!pick) {
+        const std::string why = c.cut ? c.cut_voxels.note : c.fill_voxels.note;
+        unresolved.push_back("the pair at " + where(c.pair->handle) + " (handle depth " + std::to_string(c.pair->handle.depth) +
+                             ", tunnel depth " + std::to_string(c.pair->tunnel.depth) + "): " + why);
+        continue;
+      }
+      const Choke& g = side == Side::Handle ? c.pair->handle : c.pair->tunnel;
+      FilterEdit e;
+      e.side = side;
+      e.round = round;
+      e.depth = g.depth;
+      e.persistence = c.pair->persistence;
+      e.point = g.point;
+      e.voxels = pick->shore;
+      e.volume = double(e.voxels.size()) * voxel_volume;
+      edits.push_back(std::move(e));
+    }
+    const auto t_e = Clock::now();
+    undone.clear();
+    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, options.keep_genus, undone);
+    t_edits += ms_since(t_e);
+    // A round without progress is retried once with the other flood order before giving up.
+    idle_rounds = kept.empty() ? idle_rounds + 1 : 0;
+    for (auto& e : kept) report.edits.push_back(std::move(e));
+    if (idle_rounds == 2) break;
+  }
+  // What the last rounds could not do (earlier failures that a later round redid are not news).
+  for (auto& u : undone) report.notes.push_back(u);
+  for (auto& u : unresolved) report.notes.push_back("not removed: " + u);
+  report.timings_ms["membranes"] = t_membranes;
+  report.timings_ms["edits and checks"] = t_edits;
+  report.after = now.summary;
+  for (const FilterEdit& e : report.edits) report.max_edit_depth = std::max(report.max_edit_depth, e.depth);
+  for (std::size_t v = 0; v < grid.values.size(); ++v) {
+    if (grid.values[v] != original[v]) ++report.values_changed;
+    if ((grid.values[v] <= 0) != (original[v] <= 0)) ++report.voxels_changed;
+  }
+  report.timings_ms["total"] = ms_since(t_start);
+  return report;
+}
+
+}  // namespace chokeloops

@@ -1,0 +1,221 @@
+#include "chokeloops/loops/membrane_voxels.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "two_lobe_flood.h"
+
+namespace chokeloops {
+
+namespace {
+
+// The contact vertex of the box nearest the saddle (the saddle itself when the zones meet there, as they
+// usually do: it is where they first touch).
+std::int64_t start_of_sheet(const detail::FloodBox& box, const std::array<int, 3>& saddle_local) {
+  std::int64_t best = -1, best_d2 = 0;
+  for (std::uint32_t li = 0; li < box.size(); ++li) {
+    if (!box.in_contact(li)) continue;
+    const auto p = box.local(li);
+    std::int64_t d2 = 0;
+    for (int a = 0; a < 3; ++a) d2 += std::int64_t(p[a] - saddle_local[a]) * (p[a] - saddle_local[a]);
+    if (best < 0 || d2 < best_d2) best = li, best_d2 = d2;
+  }
+  return best;
+}
+
+// Pieces of the region that hung on the shore only (a spur of a noisy surface, a pocket behind a fill)
+// would become components or cavities of their own once it changes side: they change side with it. A piece
+// is such when it lies inside the box without reaching its sides and holds neither seed piece.
+void add_debris(const detail::FloodBox& box, const ScalarGrid& grid, std::vector<std::uint32_t>& shore) {
+  static thread_local std::vector<std::uint8_t> mark;  // 1 shore, 2 visited
+  mark.assign(box.size(), 0);
+  for (std::uint32_t li : shore) mark[li] = 1;
+  const std::size_t original = shore.size();
+  for (std::size_t q = 0; q < original; ++q) {
+    const auto p0 = box.local(shore[q]);
+    for (int k0 = 0; k0 < 14; ++k0) {
+      const auto o0 = freudenthal::neighbor_offset(k0);
+      const std::array<int, 3> s{p0[0] + o0[0], p0[1] + o0[1], p0[2] + o0[2]};
+      if (s[0] < 0 || s[1] < 0 || s[2] < 0 || s[0] >= box.n[0] || s[1] >= box.n[1] || s[2] >= box.n[2]) continue;
+      const std::uint32_t start = std::uint32_t(s[0] + box.ly * s[1] + box.lz * s[2]);
+      const std::uint32_t z = box.zone(start);
+      if (mark[start] || (z != 1 && z != 2)) continue;
+      std::vector<std::uint32_t> piece{start};
+      mark[start] = 2;
+      bool keep = false;  // reaches the box's side inside the grid, or holds a seed (level 0 of the flood)
+      for (std::size_t i = 0; i < piece.size(); ++i) {
+        const std::uint32_t li = piece[i];
+        if (((*box.cell)[li] >> 3) == 0) keep = true;
+        const auto p = box.local(li);
+        for (int a = 0; a < 3; ++a) {
+          const int g = box.lo[a] + p[a];
+          if ((p[a] == 0 || p[a] == box.n[a] - 1) && g != 0 && g != grid.dims[a] - 1) keep = true;
+        }
+        for (int k = 0; k < 14; ++k) {
+          const auto o = freudenthal::neighbor_offset(k);
+          const std::array<int, 3> u{p[0] + o[0], p[1] + o[1], p[2] + o[2]};
+          if (u[0] < 0 || u[1] < 0 || u[2] < 0 || u[0] >= box.n[0] || u[1] >= box.n[1] || u[2] >= box.n[2]) continue;
+          const std::uint32_t ul = std::uint32_t(u[0] + box.ly * u[1] + box.lz * u[2]);
+          const std::uint32_t zu = box.zone(ul);
+          if (mark[ul] || (zu != 1 && zu != 2)) continue;
+          mark[ul] = 2;
+          piece.push_back(ul);
+        }
+      }
+      if (!keep) shore.insert(shore.end(), piece.begin(), piece.end());
+    }
+  }
+}
+
+enum class Sheet { Closed, Open, AtGridBorder };
+
+// The connected set of box vertices `member` accepts through `start` (14-neighbourhood); Open when it reaches
+// the box's side inside the grid (the membrane goes on beyond the box).
+template <class Member>
+Sheet collect_sheet(const detail::FloodBox& box, const ScalarGrid& grid, std::uint32_t start, Member&& member,
+                    std::vector<std::uint32_t>& sheet) {
+  static thread_local std::vector<std::uint8_t> seen;
+  seen.assign(box.size(), 0);
+  sheet.assign(1, start);
+  seen[start] = 1;
+  Sheet result = Sheet::Closed;
+  for (std::size_t q = 0; q < sheet.size(); ++q) {
+    const std::uint32_t li = sheet[q];
+    const auto p = box.local(li);
+    if (box.on_border(li)) {
+      for (int a = 0; a < 3; ++a) {
+        const int g = box.lo[a] + p[a];
+        const bool box_side = p[a] == 0 || p[a] == box.n[a] - 1;
+        if (box_side && g != 0 && g != grid.dims[a] - 1) return Sheet::Open;
+        if (box_side) result = Sheet::AtGridBorder;
+      }
+    }
+    for (int k = 0; k < 14; ++k) {
+      const auto o = freudenthal::neighbor_offset(k);
+      const std::array<int, 3> u{p[0] + o[0], p[1] + o[1], p[2] + o[2]};
+      if (u[0] < 0 || u[1] < 0 || u[2] < 0 || u[0] >= box.n[0] || u[1] >= box.n[1] || u[2] >= box.n[2]) continue;
+      const std::uint32_t ul = std::uint32_t(u[0] + box.ly * u[1] + box.lz * u[2]);
+      if (seen[ul] || !member(ul)) continue;
+      seen[ul] = 1;
+      sheet.push_back(ul);
+    }
+  }
+  return result;
+}
+
+// The piece through the saddle of the slab {0 <= (x - saddle).n < W} within the region, n along the line
+// between the seed pieces and W the largest step a Freudenthal edge makes along n: every path from one
+// side of the slab to the other steps on it.
+Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const Choke& c, const std::array<int, 3>& sc,
+                  std::vector<Id>& out) {
+  std::array<double, 3> n;
+  double len = 0;
+  for (int a = 0; a < 3; ++a) n[a] = box.seed_centroid[1][a] - box.seed_centroid[0][a], len += n[a] * n[a];
+  len = std::sqrt(len);
+  if (len == 0) n = {1, 0, 0};
+  else for (double& x : n) x /= len;
+  double W = 0;
+  for (int k = 0; k < 7; ++k) {
+    const auto o = freudenthal::neighbor_offset(k);
+    W = std::max(W, std::abs(o[0] * n[0] + o[1] * n[1] + o[2] * n[2]));
+  }
+  const std::array<int, 3> s_local{sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]};
+  auto member = [&](std::uint32_t li) {
+    const std::uint32_t z = box.zone(li);
+    if (z != 1 && z != 2) return false;  // outside the region (or not reached)
+    const auto p = box.local(li);
+    const double s = (p[0] - s_local[0]) * n[0] + (p[1] - s_local[1]) * n[1] + (p[2] - s_local[2]) * n[2];
+    return s >= 0 && s < W;
+  };
+  const std::uint32_t start = std::uint32_t(s_local[0] + box.ly * s_local[1] + box.lz * s_local[2]);
+  out.clear();
+  if (!member(start)) return Sheet::Closed;
+  std::vector<std::uint32_t> piece;
+  const Sheet result = collect_sheet(box, grid, start, member, piece);
+  if (result == Sheet::Closed) {
+    add_debris(box, grid, piece);
+    for (std::uint32_t li : piece) out.push_back(box.global(li));
+  }
+  std::sort(out.begin(), out.end());
+  (void)c;
+  return result;
+}
+
+}  // namespace
+
+MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape) {
+  MembraneVoxels out;
+  if (shape == MembraneShape::Saddle) {
+    out.found = true;
+    out.shore = {c.saddle};
+    return out;
+  }
+  FreudenthalComplex cx(grid.dims);
+  const double h = grid.voxel_size;
+  const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
+  int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
+  int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
+  const auto sc = cx.coords(c.saddle);
+  out.note = "the membrane did not close near the choke";
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    detail::FloodBox box;
+    const auto outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box);
+    bool grow = outcome == detail::FloodOutcome::Grow;
+    if (outcome == detail::FloodOutcome::Shrink) {
+      if (seed_r <= 1) break;
+      seed_r = seed_r * 2 / 3;
+      continue;
+    }
+    if (outcome == detail::FloodOutcome::Flooded && shape == MembraneShape::Plane) {
+      const Sheet s = plane_piece(box, grid, c, sc, out.shore);
+      if (s == Sheet::AtGridBorder) {
+        out.note = "the cut plane reaches the side of the grid";
+        out.shore.clear();
+        break;
+      }
+      grow = s == Sheet::Open;
+      if (!grow) {
+        out.found = !out.shore.empty();
+        out.box_radius = r;
+        if (out.found) out.note.clear();
+        return out;
+      }
+    } else if (outcome == detail::FloodOutcome::Flooded) {
+      const std::int64_t start = start_of_sheet(box, {sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]});
+      if (start < 0) {
+        out.note = "the two zones of the membrane flood never met";
+        break;
+      }
+      std::vector<std::uint32_t> sheet;
+      const Sheet s = collect_sheet(box, grid, std::uint32_t(start), [&](std::uint32_t li) { return box.in_contact(li); }, sheet);
+      if (s == Sheet::AtGridBorder) {
+        out.note = "the membrane reaches the side of the grid: it is not a disc bounded by the surface";
+        break;
+      }
+      grow = s == Sheet::Open;
+      if (!grow) {
+        // Either shore alone separates the zones (every path from one to the other steps from a shore vertex
+        // of the first to one of the second): the smaller changes fewer voxels.
+        std::array<std::vector<std::uint32_t>, 2> shores;
+        for (std::uint32_t li : sheet) shores[box.zone(li) == 1 ? 0 : 1].push_back(li);
+        const int pick = shores[1].size() < shores[0].size() ? 1 : 0;
+        add_debris(box, grid, shores[pick]);
+        out.shore.clear();
+        for (std::uint32_t li : shores[pick]) out.shore.push_back(box.global(li));
+        std::sort(out.shore.begin(), out.shore.end());
+        out.found = !out.shore.empty();
+        out.box_radius = r;
+        if (out.found) out.note.clear();
+        return out;
+      }
+    }
+    if (grow) {
+      if (r >= full) break;
+      r = std::min(full, int(std::ceil(r * 1.8)));
+      if (2 * r >= full) r = full;
+    }
+  }
+  return out;
+}
+
+}  // namespace chokeloops

@@ -1,0 +1,168 @@
+// The filter on analytic shapes whose pairs are known: what goes, what stays, and that nothing else moves.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "analytic_fields.h"
+#include "chokeloops/filter/filter.h"
+#include "chokeloops/surface/surface.h"
+
+using namespace chokeloops;
+
+namespace {
+
+// A torus (R 0.25, tube 0.08) with a bar of radius 0.02 across its hole, along x: genus 2.
+Sdf torus_with_bar(double bar_r = 0.02) {
+  Sdf t = analytic::torus(0.25, 0.08);
+  return [t, bar_r](double x, double y, double z) {
+    const double dy = y - 0.5, dz = z - 0.5, dx = std::abs(x - 0.5);
+    const double radial = std::hypot(dy, dz) - bar_r;
+    const double along = dx - 0.26;  // the bar ends inside the tube
+    const double bar = along > 0 ? std::hypot(std::max(radial, 0.0), along) : radial;
+    return std::min(t(x, y, z), bar);
+  };
+}
+
+// A ball (r 0.3) drilled along z by a hole of radius r: genus 1.
+Sdf drilled_ball(double hole_r) {
+  Sdf b = analytic::ball(0.3);
+  return [b, hole_r](double x, double y, double z) {
+    return std::max(b(x, y, z), hole_r - std::hypot(x - 0.5, y - 0.5));
+  };
+}
+
+std::string notes_of(const FilterReport& r) {
+  std::string s;
+  for (const auto& n : r.notes) s += "\n  " + n;
+  return s;
+}
+
+int surface_genus(const ScalarGrid& g) { return surface_stats(extract_zero_surface(g)).genus; }
+
+FilterOptions by_depth(double d) {
+  FilterOptions o;
+  o.has_max_depth = true;
+  o.max_depth = Threshold{d, false};
+  return o;
+}
+
+}  // namespace
+
+TEST(Filter, CutsTheThinBarOfATorusAndKeepsTheTorusHandle) {
+  ScalarGrid g = sample_field({128, 128, 128}, torus_with_bar());
+  const ScalarGrid before = g;
+  ASSERT_EQ(topology_summary(g).genus, 2);
+  const FilterReport r = filter_grid(g, by_depth(0.03));
+  EXPECT_EQ(r.before.genus, 2);
+  EXPECT_EQ(r.after.genus, 1);
+  EXPECT_EQ(r.after.components, 1);
+  EXPECT_EQ(r.after.cavities, 0);
+  EXPECT_EQ(surface_genus(g), 1);
+  ASSERT_EQ(r.edits.size(), 1u);
+  EXPECT_EQ(r.edits[0].side, Side::Handle);  // the bar is cut, its hole not filled
+  EXPECT_NEAR(r.edits[0].depth, 0.02, g.voxel_size);
+  EXPECT_TRUE(r.notes.empty());
+  // The handle left is the torus's own: its narrowest section is the tube's radius.
+  ChokeParameters p;
+  const ChokeSet left = find_chokes(g, lower_star_persistence(g), p);
+  ASSERT_EQ(left.handle_generators, 1);
+  for (const Choke& c : left.chokes)
+    if (c.kind == Kind::Generator && c.side == Side::Handle) EXPECT_NEAR(c.depth, 0.08, g.voxel_size);
+  // A disc across the bar: about pi r^2 / h^2 voxels, one layer; everything beyond the bar's neighbourhood
+  // is bit-identical.
+  EXPECT_EQ(r.voxels_changed, r.edits[0].voxels.size());
+  EXPECT_GT(r.voxels_changed, 5u);
+  EXPECT_LT(r.voxels_changed, 80u);
+  const double reach = 0.02 + 3 * g.voxel_size;
+  for (int k = 0; k < g.dims[2]; ++k)
+    for (int j = 0; j < g.dims[1]; ++j)
+      for (int i = 0; i < g.dims[0]; ++i) {
+        const auto p3 = g.world({i, j, k});
+        if (std::hypot(p3[1] - 0.5, p3[2] - 0.5) > reach + 0.03) {
+          const Id v = g.index(i, j, k);
+          ASSERT_EQ(g.values[v], before.values[v]) << "at " << p3[0] << " " << p3[1] << " " << p3[2];
+        }
+      }
+}
+
+TEST(Filter, FillsAThinHoleThroughABall) {
+  ScalarGrid g = sample_field({96, 96, 96}, drilled_ball(0.025));
+  FilterOptions o;
+  o.keep_genus = 0;
+  const FilterReport r = filter_grid(g, o);
+  EXPECT_EQ(r.before.genus, 1);
+  EXPECT_EQ(r.after.genus, 0);
+  EXPECT_EQ(r.after.components, 1);
+  EXPECT_EQ(r.after.cavities, 0);
+  EXPECT_EQ(surface_genus(g), 0);
+  ASSERT_EQ(r.edits.size(), 1u);
+  EXPECT_EQ(r.edits[0].side, Side::Tunnel);  // the hole is filled, the ball is not cut through
+  EXPECT_NEAR(r.edits[0].depth, 0.025, g.voxel_size);
+  EXPECT_LT(r.voxels_changed, 60u);
+}
+
+TEST(Filter, CutModeCutsTheBallInsteadAndFillModeFillsTheBarsHole) {
+  {
+    ScalarGrid g = sample_field({96, 96, 96}, drilled_ball(0.025));
+    FilterOptions o;
+    o.keep_genus = 0;
+    o.mode = FilterMode::Cut;
+    const FilterReport r = filter_grid(g, o);
+    EXPECT_EQ(r.after.genus, 0) << notes_of(r);
+    EXPECT_EQ(r.after.components, 1);
+    ASSERT_EQ(r.edits.size(), 1u);
+    EXPECT_EQ(r.edits[0].side, Side::Handle);
+    EXPECT_GT(r.voxels_changed, 200u);  // a slab across the ball's wall
+  }
+  {
+    ScalarGrid g = sample_field({96, 96, 96}, torus_with_bar());
+    FilterOptions o;
+    o.keep_genus = 1;
+    o.mode = FilterMode::Fill;
+    const FilterReport r = filter_grid(g, o);
+    EXPECT_EQ(r.after.genus, 1) << notes_of(r);
+    EXPECT_EQ(r.after.cavities, 0);
+    ASSERT_EQ(r.edits.size(), 1u);
+    EXPECT_EQ(r.edits[0].side, Side::Tunnel);
+  }
+}
+
+TEST(Filter, NoisyTangleCubeKeepsItsFiveMostPersistentPairs) {
+  ScalarGrid g = sample_field({96, 96, 96}, analytic::tangle_cube());
+  add_uniform_noise(g, 0.25 * g.voxel_size, 7);  // genus 51, 3 components, 4 cavities
+  const FilterSummary noisy = topology_summary(g);
+  ASSERT_GT(noisy.genus, 40);
+  FilterOptions o;
+  o.keep_genus = 5;
+  const FilterReport r = filter_grid(g, o);
+  EXPECT_EQ(r.before.genus, noisy.genus);
+  EXPECT_EQ(r.after.genus, 5);
+  EXPECT_EQ(r.after.components, noisy.components);
+  EXPECT_EQ(r.after.cavities, noisy.cavities);
+  // Noise pairs are thinner than a voxel: their edits are a voxel or a few each.
+  EXPECT_GE(r.edits.size(), 10u);
+  EXPECT_LT(r.voxels_changed, 20 * r.edits.size());
+  EXPECT_TRUE(r.notes.empty()) << notes_of(r);
+  EXPECT_EQ(topology_summary(g).genus, 5);
+}
+
+TEST(Filter, ImpossibleRequestsAreRefused) {
+  ScalarGrid g = sample_field({48, 48, 48}, analytic::torus(0.25, 0.08));
+  FilterOptions none;
+  EXPECT_THROW(filter_grid(g, none), Error);
+  FilterOptions too_many;
+  too_many.keep_genus = 2;
+  try {
+    filter_grid(g, too_many);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than the genus"), std::string::npos) << e.what();
+  }
+  // Nothing small enough: no edit, the field untouched, and the report says so by its counts.
+  const ScalarGrid before = g;
+  const FilterReport r = filter_grid(g, by_depth(0.001));
+  EXPECT_EQ(r.selected, 0);
+  EXPECT_TRUE(r.edits.empty());
+  EXPECT_EQ(r.after.genus, 1);
+  EXPECT_EQ(g.values, before.values);
+}
