@@ -23,8 +23,11 @@
 
 #include "chokeloops/analyze_volume.h"
 #include "chokeloops/io/volume_io.h"
+#include "volume_images.h"
 
 using namespace chokeloops;
+using chokeloops::test::make_image;
+using chokeloops::test::sphere_with_bridge;
 namespace fs = std::filesystem;
 
 namespace {
@@ -33,24 +36,6 @@ fs::path temp_dir(const std::string& name) {
   fs::path d = fs::temp_directory_path() / ("chokeloops_volume_" + name + "_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
-}
-
-// A volume whose voxel (i,j,k) is at affine * (i,j,k,1), filled by value(physical position in the image's
-// axis-aligned frame: spacing * (i,j,k)).
-VolumeImage make_image(std::array<int, 3> dims, std::array<double, 3> spacing, const std::string& datatype,
-                       const std::function<float(double, double, double)>& value) {
-  VolumeImage v;
-  v.dims = dims;
-  v.datatype = datatype;
-  v.convention = "RAS";
-  for (int r = 0; r < 3; ++r) v.affine[r][r] = spacing[r];
-  v.values.resize(std::size_t(v.voxel_count()));
-  for (int k = 0; k < dims[2]; ++k)
-    for (int j = 0; j < dims[1]; ++j)
-      for (int i = 0; i < dims[0]; ++i)
-        v.values[std::size_t(i) + std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * k)] =
-            value(spacing[0] * i, spacing[1] * j, spacing[2] * k);
-  return v;
 }
 
 VolumeAnalysis analyze_file(const std::string& path, VolumeFieldOptions f, AnalyzeOptions o = {}) {
@@ -134,17 +119,6 @@ TEST(VolumeMasks, TubeWithStenosisNeckDepthIsItsRadius) {
 namespace {
 // A solid sphere (radius 10 around (24,24,24)) with a bridge of single voxels: up from its top, across at
 // height z_a, then (after a one-step offset in x and z) at height z_b and down onto the sphere.
-VolumeImage sphere_with_bridge(int z_a, int z_b) {
-  auto img = make_image({48, 48, 48}, {1, 1, 1}, "uint8", [](double x, double y, double z) {
-    return std::hypot(std::hypot(x - 24, y - 24), z - 24) <= 10 ? 1.f : 0.f;
-  });
-  auto set = [&](int i, int j, int k) { img.values[std::size_t(i) + 48 * (std::size_t(j) + 48 * std::size_t(k))] = 1.f; };
-  for (int k = 34; k <= z_a; ++k) set(24, 24, k);
-  for (int i = 24; i <= 28; ++i) set(i, 24, z_a);
-  for (int i = 29; i <= 32; ++i) set(i, 24, z_b);
-  for (int k = 30; k <= z_b; ++k) set(32, 24, k);
-  return img;
-}
 }  // namespace
 
 TEST(VolumeMasks, SphereWithOneVoxelBridge) {

@@ -131,6 +131,7 @@ Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
       sub.values[s] = e.side == Side::Handle ? half : -half;
       flipped[s] = 1;
     }
+  const float kSmallest = float(1e-3 * grid.voxel_size);
   ScalarGrid exact = sub;
   redistance_from_signs(exact);
   std::vector<std::uint8_t> touched(sub.values.size(), 0);
@@ -144,10 +145,12 @@ Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
         const Id s = sub.index(i, j, k);
         if (!touched[s]) continue;
         const Id v = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
-        const float old = grid.values[v], near = exact.values[s];
-        float value = old;
-        if (flipped[s]) value = near;
-        else if ((near < 0) == (old < 0) && std::abs(near) < std::abs(old)) value = near;
+        const float old = grid.values[v], near = std::abs(exact.values[s]);
+        // The side is the edit's (the solid is {phi <= 0}); only the magnitude comes from the redistance, and
+        // it is never 0, which would put an outside vertex inside.
+        const bool inside = (old <= 0) != bool(flipped[s]);
+        const float magnitude = std::max(flipped[s] ? near : std::min(std::abs(old), near), kSmallest);
+        const float value = inside ? -magnitude : magnitude;
         if (value == old) continue;
         undo.old_values.push_back({v, old});
         grid.values[v] = value;
@@ -167,6 +170,34 @@ bool as_expected(const FilterSummary& got, const FilterSummary& before, int floo
          got.genus >= std::max(floor, 0);
 }
 
+// Components of one side of the grid ({phi <= 0} when inside, else its complement) by the Freudenthal
+// neighbourhood; -1 on the other side.
+std::vector<std::int32_t> label_side(const ScalarGrid& grid, const FreudenthalComplex& cx, bool inside) {
+  std::vector<std::int32_t> label(grid.values.size(), -1);
+  std::vector<Id> stack;
+  std::int32_t next = 0;
+  auto on_side = [&](Id v) { return (grid.values[std::size_t(v)] <= 0) == inside; };
+  for (Id start = 0; start < Id(label.size()); ++start) {
+    if (label[std::size_t(start)] >= 0 || !on_side(start)) continue;
+    label[std::size_t(start)] = next;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const Id v = stack.back();
+      stack.pop_back();
+      const auto c = cx.coords(v);
+      for (int k = 0; k < 14; ++k) {
+        if (!cx.neighbor_inside(c, k)) continue;
+        const Id u = v + cx.neighbor_delta(k);
+        if (label[std::size_t(u)] >= 0 || !on_side(u)) continue;
+        label[std::size_t(u)] = next;
+        stack.push_back(u);
+      }
+    }
+    ++next;
+  }
+  return label;
+}
+
 // Applies `edits` and keeps those whose check passes (halves of a failed batch are checked on their own);
 // returns the kept ones and the summary of the field they leave.
 // `now` is the analysis of the field as it stands (updated with every batch kept).
@@ -181,7 +212,53 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
     now = std::move(after);
     return edits;
   }
+  // Edits that split a component (a cut whose solid neighbours fall into different components) or sealed a
+  // cavity (a fill whose outside neighbours do) are found by one labelling of the edited grid and dropped;
+  // a batch of thousands of edits then costs a few checks, not a bisection down to each culprit.
+  std::vector<char> suspect(edits.size(), 0);
+  std::size_t suspects = 0;
+  if (edits.size() > 1 && (got.components > current.components || got.cavities > current.cavities)) {
+    FreudenthalComplex cx(grid.dims);
+    for (int pass = 0; pass < 2; ++pass) {
+      const bool inside = pass == 0;
+      if (inside ? got.components <= current.components : got.cavities <= current.cavities) continue;
+      const std::vector<std::int32_t> label = label_side(grid, cx, inside);
+      for (std::size_t i = 0; i < edits.size(); ++i) {
+        if ((edits[i].side == Side::Handle) != inside || suspect[i]) continue;
+        std::int32_t first = -1;
+        for (Id v : edits[i].voxels) {
+          const auto c = cx.coords(v);
+          for (int k = 0; k < 14 && !suspect[i]; ++k) {
+            if (!cx.neighbor_inside(c, k)) continue;
+            const std::int32_t l = label[std::size_t(v + cx.neighbor_delta(k))];
+            if (l < 0) continue;
+            if (first < 0) first = l;
+            else if (l != first) suspect[i] = 1;
+          }
+          if (suspect[i]) break;
+        }
+        suspects += std::size_t(suspect[i]);
+      }
+    }
+  }
   restore(grid, undo);
+  if (suspects > 0 && suspects < edits.size()) {
+    std::vector<FilterEdit> rest;
+    for (std::size_t i = 0; i < edits.size(); ++i) {
+      if (!suspect[i]) {
+        rest.push_back(std::move(edits[i]));
+        continue;
+      }
+      const FilterEdit& e = edits[i];
+      std::ostringstream s;
+      s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at (" << e.point[0]
+        << ", " << e.point[1] << ", " << e.point[2] << ") "
+        << (e.side == Side::Handle ? "split a component (with the other edits of its round)" : "sealed a cavity (with the other edits of its round)")
+        << ": undone";
+      notes.push_back(s.str());
+    }
+    return apply_checked(grid, std::move(rest), now, floor, notes);
+  }
   if (edits.size() == 1) {
     const FilterEdit& e = edits[0];
     std::ostringstream s;

@@ -1,0 +1,130 @@
+// `chokeloops filter` on files: a label volume, a .vdb level set, a mesh, and the requests it must refuse.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <nlohmann/json.hpp>
+
+#include "analytic_fields.h"
+#include "chokeloops/filter/filter_file.h"
+#include "chokeloops/io/vdb_io.h"
+#include "chokeloops/io/volume_io.h"
+#include "volume_images.h"
+
+using namespace chokeloops;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("chokeloops_filter_" + name + "_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+// Runs the CLI; returns its exit code and puts stderr in `err`.
+int cli(const std::string& args, std::string& err, const fs::path& dir) {
+  const std::string e = (dir / "err.txt").string();
+  const int status = std::system((std::string("'") + CHOKELOOPS_CLI + "' filter " + args + " --quiet 2>'" + e + "' >/dev/null").c_str());
+  std::ifstream in(e);
+  err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return WEXITSTATUS(status);
+}
+
+}  // namespace
+
+TEST(FilterFiles, SphereWithAOneVoxelBridgeLosesThatVoxelOnly) {
+  const fs::path d = temp_dir("bridge");
+  const std::string in = (d / "b.nii.gz").string(), out = (d / "f.nii.gz").string();
+  const VolumeImage image = test::sphere_with_bridge(40, 40);
+  write_scalar_volume(image, in);
+  FilterFileOptions o;
+  o.field.has_label = true;
+  o.field.label = 1;
+  o.filter.keep_genus = 0;
+  const FilterFileResult r = filter_file(in, out, o);
+  EXPECT_EQ(r.report.before.genus, 1);
+  std::string notes;
+  for (const auto& n : r.report.notes) notes += "\n  " + n;
+  EXPECT_EQ(r.report.after.genus, 0) << notes;
+  EXPECT_EQ(r.output_check.genus, 0);
+  EXPECT_EQ(r.output_check.components, 1);
+  const VolumeImage back = read_volume(out);
+  EXPECT_EQ(back.datatype, "uint8");
+  EXPECT_EQ(back.dims, image.dims);
+  EXPECT_EQ(back.affine, read_volume(in).affine);
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < back.values.size(); ++i) changed += back.values[i] != image.values[i];
+  EXPECT_EQ(changed, 1u);  // the bridge voxel, and nothing else
+  EXPECT_EQ(r.report.voxels_changed, 1u);
+  fs::remove_all(d);
+}
+
+TEST(FilterFiles, VdbLevelSetAndMeshOutputsAreCheckedWhenReadBack) {
+  const fs::path d = temp_dir("vdb");
+  // A torus with a thin bar across its hole (genus 2) as a .vdb level set: the bar goes, the torus stays.
+  Sdf t = analytic::torus(0.25, 0.08);
+  ScalarGrid g = sample_field({96, 96, 96}, [t](double x, double y, double z) {
+    const double bar = std::max(std::hypot(y - 0.5, z - 0.5) - 0.02, std::abs(x - 0.5) - 0.26);
+    return std::min(t(x, y, z), bar);
+  });
+  write_vdb(g, (d / "in.vdb").string());
+  FilterFileOptions o;
+  o.filter.has_max_depth = true;
+  o.filter.max_depth = Threshold::parse("0.03");
+  const FilterFileResult r = filter_file((d / "in.vdb").string(), (d / "out.vdb").string(), o);
+  EXPECT_EQ(r.report.before.genus, 2);
+  EXPECT_EQ(r.report.after.genus, 1);
+  EXPECT_EQ(r.output_check.genus, 1);
+  // The surfaces move only where the bar was cut: no further than its radius and a voxel.
+  EXPECT_LE(r.hausdorff, r.report.max_edit_depth + g.voxel_size);
+  EXPECT_GT(r.hausdorff, 0.0);
+  const nlohmann::json j = nlohmann::json::parse(filter_report_json(r));
+  EXPECT_EQ(j["pairs_removed"], 1);
+  ASSERT_EQ(j["edits"].size(), 1u);
+  EXPECT_EQ(j["edits"][0]["kind"], "cut");
+  fs::remove_all(d);
+}
+
+TEST(FilterFiles, MeshGoesToTheFilteredSurface) {
+  const fs::path d = temp_dir("mesh");
+  const std::string mesh = std::string(CHOKELOOPS_SOURCE_DIR) + "/data/meshes/genus3_directional.off";
+  std::string err;
+  ASSERT_EQ(cli("'" + mesh + "' -o '" + (d / "g.ply").string() + "' --keep-genus 1 --resolution 96 --report '" +
+                    (d / "r.json").string() + "'",
+                err, d),
+            0)
+      << err;
+  std::ifstream in(d / "r.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["before"]["genus"], 3);
+  EXPECT_EQ(j["after"]["genus"], 1);
+  EXPECT_EQ(j["output_read_back"]["genus"], 1);
+  EXPECT_TRUE(fs::exists(d / "g.ply"));
+  fs::remove_all(d);
+}
+
+TEST(FilterFiles, ImpossibleRequestsAreOneLineErrorsWithExitCode2) {
+  const fs::path d = temp_dir("bad");
+  const std::string mesh = std::string(CHOKELOOPS_SOURCE_DIR) + "/data/meshes/genus3_directional.off";
+  std::string err;
+  auto one_line = [&](const std::string& needle) {
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find(needle), std::string::npos) << err;
+  };
+  EXPECT_EQ(cli("'" + mesh + "' -o '" + (d / "g.ply").string() + "' --resolution 48", err, d), 2);
+  one_line("nothing to select");
+  EXPECT_EQ(cli("'" + mesh + "' -o '" + (d / "g.ply").string() + "' --keep-genus 7 --resolution 48", err, d), 2);
+  one_line("more than the genus");
+  EXPECT_EQ(cli("'" + mesh + "' -o '" + (d / "g.obj").string() + "' --keep-genus 0 --resolution 48", err, d), 2);
+  one_line(".ply");
+  EXPECT_EQ(cli("'" + (d / "missing.vdb").string() + "' -o '" + (d / "o.vdb").string() + "' --keep-genus 0", err, d), 2);
+  EXPECT_EQ(cli("'" + mesh + "' -o '" + (d / "g.ply").string() + "' --mode sideways --keep-genus 0", err, d), 2);
+  one_line("--mode");
+  fs::remove_all(d);
+}
