@@ -22,6 +22,7 @@
 #include <cmath>
 #include <map>
 #include <sstream>
+#include <unordered_set>
 
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/loops/membrane_voxels.h"
@@ -80,8 +81,7 @@ std::string where(const Choke& c) {
   return s.str();
 }
 
-// The vertices an edit touches (its voxels and their neighbourhood of a depth plus two voxels), and the
-// values they had, so that a failed check can put them back.
+// The values an edit overwrote, in order (restored from the last), so that a failed check can put them back.
 struct Undo {
   std::vector<std::pair<Id, float>> old_values;
 };
@@ -92,69 +92,57 @@ Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
   Undo undo;
   if (edits.empty()) return undo;
   FreudenthalComplex cx(grid.dims);
-  std::array<int, 3> lo{grid.dims[0], grid.dims[1], grid.dims[2]}, hi{-1, -1, -1};
-  struct Box { std::array<int, 3> lo, hi; };
-  std::vector<Box> boxes;
-  for (const FilterEdit& e : edits) {
-    Box b{{grid.dims[0], grid.dims[1], grid.dims[2]}, {-1, -1, -1}};
-    for (Id v : e.voxels) {
-      const auto p = cx.coords(v);
-      for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], p[a]), b.hi[a] = std::max(b.hi[a], p[a]);
-    }
-    for (int a = 0; a < 3; ++a) {
-      const int m = int(std::ceil(e.depth / grid.h(a))) + 2;
-      b.lo[a] = std::max(0, b.lo[a] - m);
-      b.hi[a] = std::min(grid.dims[a] - 1, b.hi[a] + m);
-      lo[a] = std::min(lo[a], b.lo[a]);
-      hi[a] = std::max(hi[a], b.hi[a]);
-    }
-    boxes.push_back(b);
-  }
-  // The union of the neighbourhoods, redistanced from the new signs on the box that holds them all.
-  ScalarGrid sub;
-  for (int a = 0; a < 3; ++a) sub.dims[a] = hi[a] - lo[a] + 1;
-  sub.voxel_size = grid.voxel_size;
-  sub.spacing = grid.spacing;
-  sub.origin = grid.world(lo);
-  sub.values.resize(std::size_t(sub.vertex_count()));
-  auto sub_index = [&](const std::array<int, 3>& p) { return sub.index(p[0] - lo[0], p[1] - lo[1], p[2] - lo[2]); };
-  tbb::parallel_for(0, sub.dims[2], [&](int k) {
-    for (int j = 0; j < sub.dims[1]; ++j)
-      for (int i = 0; i < sub.dims[0]; ++i) sub.values[sub.index(i, j, k)] = grid.values[grid.index(lo[0] + i, lo[1] + j, lo[2] + k)];
-  });
-  std::vector<std::uint8_t> flipped(sub.values.size(), 0);
-  // A flipped vertex sits half a voxel past the new surface, as a mask's boundary does between voxels.
+  auto set = [&](Id v, float value) {
+    undo.old_values.push_back({v, grid.values[std::size_t(v)]});
+    grid.values[std::size_t(v)] = value;
+  };
+  // Every edit's side first, so that each neighbourhood below sees all the new signs near it. A flipped
+  // vertex sits half a voxel past the new surface, as a mask's boundary does between voxels.
   const float half = float(0.5 * grid.voxel_size);
+  const float kSmallest = float(1e-3 * grid.voxel_size);
+  std::unordered_set<Id> flipped;
   for (const FilterEdit& e : edits)
     for (Id v : e.voxels) {
-      const Id s = sub_index(cx.coords(v));
-      sub.values[s] = e.side == Side::Handle ? half : -half;
-      flipped[s] = 1;
+      set(v, e.side == Side::Handle ? half : -half);
+      flipped.insert(v);
     }
-  const float kSmallest = float(1e-3 * grid.voxel_size);
-  ScalarGrid exact = sub;
-  redistance_from_signs(exact);
-  std::vector<std::uint8_t> touched(sub.values.size(), 0);
-  for (const Box& b : boxes)
-    for (int k = b.lo[2]; k <= b.hi[2]; ++k)
-      for (int j = b.lo[1]; j <= b.hi[1]; ++j)
-        for (int i = b.lo[0]; i <= b.hi[0]; ++i) touched[sub_index({i, j, k})] = 1;
-  for (int k = 0; k < sub.dims[2]; ++k)
-    for (int j = 0; j < sub.dims[1]; ++j)
-      for (int i = 0; i < sub.dims[0]; ++i) {
-        const Id s = sub.index(i, j, k);
-        if (!touched[s]) continue;
-        const Id v = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
-        const float old = grid.values[v], near = std::abs(exact.values[s]);
-        // The side is the edit's (the solid is {phi <= 0}); only the magnitude comes from the redistance, and
-        // it is never 0, which would put an outside vertex inside.
-        const bool inside = (old <= 0) != bool(flipped[s]);
-        const float magnitude = std::max(flipped[s] ? near : std::min(std::abs(old), near), kSmallest);
-        const float value = inside ? -magnitude : magnitude;
-        if (value == old) continue;
-        undo.old_values.push_back({v, old});
-        grid.values[v] = value;
-      }
+  // Then each edit's neighbourhood (its voxels' box grown by its depth and two voxels), one after the other in
+  // the edits' order: redistanced from the signs on that box, a vertex takes the new distance where it is
+  // nearer than its value (the new surface is there); its side never changes, and no magnitude is 0.
+  for (const FilterEdit& e : edits) {
+    std::array<int, 3> lo{grid.dims[0], grid.dims[1], grid.dims[2]}, hi{-1, -1, -1};
+    for (Id v : e.voxels) {
+      const auto p = cx.coords(v);
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+    }
+    ScalarGrid sub;
+    for (int a = 0; a < 3; ++a) {
+      const int m = int(std::ceil(e.depth / grid.h(a))) + 2;
+      lo[a] = std::max(0, lo[a] - m);
+      hi[a] = std::min(grid.dims[a] - 1, hi[a] + m);
+      sub.dims[a] = hi[a] - lo[a] + 1;
+    }
+    sub.voxel_size = grid.voxel_size;
+    sub.spacing = grid.spacing;
+    sub.origin = grid.world(lo);
+    sub.values.resize(std::size_t(sub.vertex_count()));
+    for (int k = 0; k < sub.dims[2]; ++k)
+      for (int j = 0; j < sub.dims[1]; ++j)
+        for (int i = 0; i < sub.dims[0]; ++i)
+          sub.values[std::size_t(sub.index(i, j, k))] = grid.values[std::size_t(grid.index(lo[0] + i, lo[1] + j, lo[2] + k))];
+    ScalarGrid exact = sub;
+    redistance_from_signs(exact);
+    for (int k = 0; k < sub.dims[2]; ++k)
+      for (int j = 0; j < sub.dims[1]; ++j)
+        for (int i = 0; i < sub.dims[0]; ++i) {
+          const Id v = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
+          const float now = grid.values[std::size_t(v)], near = std::abs(exact.values[std::size_t(sub.index(i, j, k))]);
+          const bool inside = now <= 0;
+          const float magnitude = std::max(flipped.count(v) ? near : std::min(std::abs(now), near), kSmallest);
+          const float value = inside ? -magnitude : magnitude;
+          if (value != now) set(v, value);
+        }
+  }
   return undo;
 }
 
@@ -168,6 +156,10 @@ void restore(ScalarGrid& grid, const Undo& undo) {
 bool as_expected(const FilterSummary& got, const FilterSummary& before, int floor) {
   return got.components == before.components && got.cavities == before.cavities && got.genus < before.genus &&
          got.genus >= std::max(floor, 0);
+}
+
+bool close_to(const std::array<double, 3>& a, const std::array<double, 3>& b, double h) {
+  return std::abs(a[0] - b[0]) <= h && std::abs(a[1] - b[1]) <= h && std::abs(a[2] - b[2]) <= h;
 }
 
 // Components of one side of the grid ({phi <= 0} when inside, else its complement) by the Freudenthal
@@ -202,7 +194,7 @@ std::vector<std::int32_t> label_side(const ScalarGrid& grid, const FreudenthalCo
 // returns the kept ones and the summary of the field they leave.
 // `now` is the analysis of the field as it stands (updated with every batch kept).
 std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, int floor,
-                                      std::vector<std::string>& notes) {
+                                      std::vector<std::string>& notes, std::vector<std::pair<Side, std::array<double, 3>>>& failed) {
   if (edits.empty()) return {};
   const FilterSummary current = now.summary;
   const Undo undo = apply_edits(grid, edits);
@@ -250,6 +242,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
         continue;
       }
       const FilterEdit& e = edits[i];
+      failed.push_back({e.side, e.point});
       std::ostringstream s;
       s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at (" << e.point[0]
         << ", " << e.point[1] << ", " << e.point[2] << ") "
@@ -257,10 +250,11 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
         << ": undone";
       notes.push_back(s.str());
     }
-    return apply_checked(grid, std::move(rest), now, floor, notes);
+    return apply_checked(grid, std::move(rest), now, floor, notes, failed);
   }
   if (edits.size() == 1) {
     const FilterEdit& e = edits[0];
+    failed.push_back({e.side, e.point});
     std::ostringstream s;
     s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at ("
       << e.point[0] << ", " << e.point[1] << ", " << e.point[2] << ") left genus " << got.genus << ", " << got.components
@@ -272,8 +266,8 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
   const std::size_t half = edits.size() / 2;
   std::vector<FilterEdit> second(std::make_move_iterator(edits.begin() + std::ptrdiff_t(half)), std::make_move_iterator(edits.end()));
   edits.resize(half);
-  std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, floor, notes);
-  std::vector<FilterEdit> more = apply_checked(grid, std::move(second), now, floor, notes);
+  std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, floor, notes, failed);
+  std::vector<FilterEdit> more = apply_checked(grid, std::move(second), now, floor, notes, failed);
   kept.insert(kept.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
   return kept;
 }
@@ -303,6 +297,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
   Analysis now = std::move(first);
   double t_membranes = 0, t_edits = 0;
   std::vector<std::string> unresolved, undone;
+  std::vector<std::pair<Side, std::array<double, 3>>> failed;  // edits undone as splitting or sealing
   int idle_rounds = 0;
   for (int round = 1; round <= options.max_rounds; ++round) {
     if (progress && !progress("filter", double(round - 1) / options.max_rounds)) throw Error("interrupted", 3);
@@ -337,8 +332,14 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       if (!(cut ? c.cut : c.fill)) return;
       MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
       const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
-      for (MembraneShape s : {shape, shape == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane, MembraneShape::Saddle}) {
-        if (s == MembraneShape::Saddle && g.depth >= 0.5 * grid.voxel_size) break;
+      // A pair thinner than half a voxel (noise) is one voxel wide where it is narrowest: its saddle alone is
+      // tried first, before floods that would grow to the whole grid looking for a closed sheet.
+      const bool sub_voxel = g.depth < 0.5 * grid.voxel_size;
+      const MembraneShape other = shape == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
+      const std::array<MembraneShape, 3> order = sub_voxel ? std::array<MembraneShape, 3>{MembraneShape::Saddle, shape, other}
+                                                           : std::array<MembraneShape, 3>{shape, other, MembraneShape::Saddle};
+      for (MembraneShape s : order) {
+        if (s == MembraneShape::Saddle && !sub_voxel) break;
         try {
           m = membrane_voxels(grid, g, options.membrane, s);
         } catch (const Error& e) {
@@ -361,7 +362,16 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       const MembraneVoxels* pick = nullptr;
       Side side = Side::Handle;
       const bool cut_ok = c.cut && c.cut_voxels.found, fill_ok = c.fill && c.fill_voxels.found;
-      if (cut_ok && (!fill_ok || c.cut_voxels.shore.size() <= c.fill_voxels.shore.size())) pick = &c.cut_voxels;
+      // A side whose edit split a component or sealed a cavity in an earlier round gives way to the other.
+      auto failed_before = [&](const Choke& g) {
+        for (const auto& [side, point] : failed)
+          if (side == g.side && close_to(point, g.point, grid.voxel_size)) return true;
+        return false;
+      };
+      const bool cut_failed = cut_ok && fill_ok && failed_before(c.pair->handle);
+      const bool fill_failed = cut_ok && fill_ok && failed_before(c.pair->tunnel);
+      const bool cut_smaller = c.cut_voxels.shore.size() <= c.fill_voxels.shore.size();
+      if (cut_ok && (!fill_ok || (cut_failed != fill_failed ? fill_failed : cut_smaller))) pick = &c.cut_voxels;
       else if (fill_ok) pick = &c.fill_voxels, side = Side::Tunnel;
       if (!pick) {
         const std::string why = c.cut ? c.cut_voxels.note : c.fill_voxels.note;
@@ -382,7 +392,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     }
     const auto t_e = Clock::now();
     undone.clear();
-    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, options.keep_genus, undone);
+    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, options.keep_genus, undone, failed);
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;
