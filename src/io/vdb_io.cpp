@@ -13,6 +13,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/blocked_range.h>
 
+#include "vdb_guard.h"
+
 namespace chokeloops {
 namespace {
 
@@ -47,10 +49,12 @@ std::string one_line(std::string s) {
   return s;
 }
 
-// Opens the file (no delayed loading: the grid must not depend on the file staying unchanged).
+// Opens the file (no delayed loading: the grid must not depend on the file staying unchanged). Every value
+// block is then read through the guard of vdb_guard.cpp, which refuses a corrupt one before OpenVDB's buffers.
 std::unique_ptr<openvdb::io::File> open_vdb(const std::string& path) {
   ensure_openvdb_initialized();
   check_readable(path);
+  require_vdb_guard(path);
   auto file = std::make_unique<openvdb::io::File>(path);
   try {
     file->open(/*delayLoad=*/false);
@@ -82,6 +86,8 @@ std::vector<VdbGridInfo> list_open(openvdb::io::File& file, const std::string& p
       out.push_back({g->getName(), g->valueType(), openvdb::GridBase::gridClassToString(g->getGridClass())});
     }
   } catch (const openvdb::Exception& e) {
+    throw Error(quoted(path) + ": corrupt VDB file (" + one_line(e.what()) + ")");
+  } catch (const std::exception& e) {
     throw Error(quoted(path) + ": corrupt VDB file (" + one_line(e.what()) + ")");
   }
   return out;
@@ -150,6 +156,8 @@ openvdb::FloatGrid::Ptr read_vdb_float_grid(const std::string& path, const std::
   try {
     base = file->readGrid(chosen);
   } catch (const openvdb::Exception& e) {
+    throw Error(quoted(path) + ": cannot read grid '" + chosen + "' (" + one_line(e.what()) + ")");
+  } catch (const std::exception& e) {
     throw Error(quoted(path) + ": cannot read grid '" + chosen + "' (" + one_line(e.what()) + ")");
   }
   file->close();

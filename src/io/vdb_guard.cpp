@@ -1,0 +1,162 @@
+// A guard in front of OpenVDB's value-block reader, so that a corrupt .vdb file is refused, never read past a
+// buffer.
+//
+// Why: every block of values in a .vdb file (the voxels of each leaf, and in the topology the tile values of each
+// internal node) is stored as an 8-byte length and then that many bytes: blosc or zlib compressed when the length
+// is positive, raw when it is zero or negative (minus the byte count). OpenVDB reads a block with
+// io::bloscFromStream or io::unzipFromStream (io/Compression.cc), handing it a buffer sized for the values the
+// tree expects. OpenVDB 10 (Debian 12 ships 10.0.1) reads a raw block into that buffer for as many bytes as the
+// file claims and only then compares the two sizes: one changed byte in a length overflows the heap (libFuzzer
+// on bunny_8.vdb: ASan heap-buffer-overflow in bloscFromStream under LeafNode::readBuffers). It also allocates
+// whatever positive length the file claims, and hands blosc a header it never compares with that length, which
+// lets blosc read past the block. OpenVDB 11 compares the raw length first; the rest it still trusts.
+//
+// How: both readers are exported by libopenvdb.so and called through its procedure linkage table, so the
+// definitions at the end of this file, linked into the program, take their place for every call the library
+// makes (ELF symbol interposition, the mechanism that lets a program bring its own malloc). They read the same
+// format, but check each block before anything is written: a raw block must be exactly the buffer's size; a
+// compressed one no longer than the largest the writer makes for that size (blosc: size + its 16-byte header;
+// zlib: compressBound), present in full in the file, and for blosc its header must agree with both sizes
+// (blosc_cbuffer_validate) before it is decompressed. A block that fails is an openvdb::IoError, which the
+// reader turns into a one-line Error naming the file (exit code 2). A valid file reads exactly as before.
+// Whether interposition took effect depends on how the program was linked and loaded, so require_vdb_guard()
+// proves it once per process: it writes a one-leaf grid with blosc and with zlib into memory, reads it back and
+// checks that these functions read the blocks and that the values came back.
+#include "vdb_guard.h"
+
+#include <blosc.h>
+#include <zlib.h>
+
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <sstream>
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/io/Compression.h>
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+
+#include "chokeloops/grid.h"
+#include "chokeloops/io/vdb_io.h"
+
+namespace chokeloops {
+namespace {
+
+std::atomic<unsigned long> g_blocks{0};
+
+enum class Codec { blosc, zip };
+
+[[noreturn]] void refuse(const std::string& what) { OPENVDB_THROW(openvdb::IoError, "corrupt value block: " << what); }
+
+// Reads one block of `expected` bytes into `data`, or skips it when `data` is null (OpenVDB's seek mode).
+void read_block(std::istream& is, char* data, std::size_t expected, Codec codec) {
+  g_blocks.fetch_add(1, std::memory_order_relaxed);
+  std::int64_t length = 0;
+  if (!is.read(reinterpret_cast<char*>(&length), sizeof length)) refuse("the file ends before a block's length");
+  if (length <= 0) {  // raw bytes
+    if (length == std::numeric_limits<std::int64_t>::min()) refuse("a block's length is -2^63");
+    if (std::uint64_t(-length) != expected) {
+      std::ostringstream s;
+      s << "a block of " << expected << " bytes claims " << -length << " raw bytes";
+      refuse(s.str());
+    }
+    if (!data) {
+      is.seekg(std::streamoff(expected), std::ios_base::cur);
+    } else if (!is.read(data, std::streamsize(expected))) {
+      refuse("the file ends inside a block");
+    }
+    return;
+  }
+  if (!data) {
+    is.seekg(std::streamoff(length), std::ios_base::cur);
+    return;
+  }
+  const std::uint64_t largest =
+      codec == Codec::blosc ? std::uint64_t(expected) + BLOSC_MAX_OVERHEAD : std::uint64_t(compressBound(uLong(expected)));
+  if (std::uint64_t(length) > largest) {
+    std::ostringstream s;
+    s << "a block of " << expected << " bytes claims " << length << " compressed bytes";
+    refuse(s.str());
+  }
+  std::unique_ptr<char[]> packed(new char[std::size_t(length)]);
+  if (!is.read(packed.get(), std::streamsize(length))) refuse("the file ends inside a block");
+  if (codec == Codec::blosc) {
+    std::size_t nbytes = 0;
+    if (blosc_cbuffer_validate(packed.get(), std::size_t(length), &nbytes) != 0 || nbytes != expected)
+      refuse("a blosc block's header does not match its length or the values it holds");
+    const int got = blosc_decompress_ctx(packed.get(), data, expected, /*numinternalthreads=*/1);
+    if (got < 0 || std::size_t(got) != expected) refuse("a blosc block does not decompress");
+  } else {
+    uLongf got = uLongf(expected);
+    const int status = uncompress(reinterpret_cast<Bytef*>(data), &got, reinterpret_cast<const Bytef*>(packed.get()),
+                                  uLong(length));
+    if (status != Z_OK || got != expected) refuse("a zlib block does not decompress");
+  }
+}
+
+// One leaf's worth of values (some active, some not, so that mask compression is used), written with
+// `compression` into memory and read back through OpenVDB's own stream reader.
+bool round_trip(std::uint32_t compression) {
+  auto grid = openvdb::FloatGrid::create(3.f);
+  for (int i = 0; i < 8; ++i) grid->tree().setValue(openvdb::Coord(i, i % 3, 1), 0.25f * float(i) - 1.f);
+  std::ostringstream os(std::ios::binary);
+  openvdb::io::Stream writer(os);
+  writer.setCompression(compression);
+  writer.write({grid});
+  const unsigned long before = g_blocks.load();
+  std::istringstream is(os.str(), std::ios::binary);
+  openvdb::io::Stream reader(is);
+  auto grids = reader.getGrids();
+  if (g_blocks.load() == before || !grids || grids->size() != 1) return false;
+  auto back = openvdb::gridPtrCast<openvdb::FloatGrid>(grids->front());
+  if (!back || back->activeVoxelCount() != grid->activeVoxelCount()) return false;
+  for (auto it = grid->cbeginValueOn(); it; ++it)
+    if (back->tree().getValue(it.getCoord()) != *it) return false;
+  return true;
+}
+
+}  // namespace
+
+void require_vdb_guard(const std::string& path) {
+  static std::once_flag flag;
+  static bool in_place = false;
+  static std::string why;
+  std::call_once(flag, [] {
+    ensure_openvdb_initialized();
+    try {
+      in_place = round_trip(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK) &&
+                 round_trip(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
+    } catch (const std::exception& e) {
+      why = std::string(" (") + e.what() + ")";
+    }
+  });
+  if (!in_place)
+    throw InternalError("'" + path + "': not read: the guard against OpenVDB's unchecked block reader is not in "
+                        "place in this build" + why);
+}
+
+unsigned long vdb_guard_blocks_read() { return g_blocks.load(); }
+
+}  // namespace chokeloops
+
+// The two readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h). `numBytes` is the size of
+// the buffer at `data` (null: skip the block).
+namespace openvdb {
+OPENVDB_USE_VERSION_NAMESPACE
+namespace OPENVDB_VERSION_NAME {
+namespace io {
+
+void bloscFromStream(std::istream& is, char* data, size_t numBytes) {
+  chokeloops::read_block(is, data, numBytes, chokeloops::Codec::blosc);
+}
+
+void unzipFromStream(std::istream& is, char* data, size_t numBytes) {
+  chokeloops::read_block(is, data, numBytes, chokeloops::Codec::zip);
+}
+
+}  // namespace io
+}  // namespace OPENVDB_VERSION_NAME
+}  // namespace openvdb

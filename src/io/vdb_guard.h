@@ -1,0 +1,15 @@
+#pragma once
+// The guard in front of OpenVDB 10's value-block reader (vdb_guard.cpp explains why and how).
+#include <string>
+
+namespace chokeloops {
+
+// Throws InternalError unless the guarded block reader has taken the place of OpenVDB's in this process
+// (checked once, by a round trip through blosc and zip compressed blocks): without it a corrupt .vdb file
+// could overflow OpenVDB's buffers, so no .vdb file is read. `path` only names the file in the message.
+void require_vdb_guard(const std::string& path);
+
+// How many value blocks the guarded reader has read or skipped in this process (for tests).
+unsigned long vdb_guard_blocks_read();
+
+}  // namespace chokeloops
