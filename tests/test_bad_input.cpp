@@ -325,3 +325,28 @@ TEST_F(BadInput, FuzzVdbBlockLongerThanItsBuffer) {
   expect_bad(write("nbytes.vdb", with(12, std::uint32_t(1) << 20)), "blosc block's header");
   expect_bad(write("cbytes.vdb", with(20, std::uint32_t(1) << 20)), "blosc block's header");
 }
+
+TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
+  // Found by fuzzing, once blocks were guarded: a metadata name whose length claims 1.7 GB made OpenVDB 10 allocate
+  // it (regression-c9048a042607). Names, values and the delayed-load table are now checked against the file first.
+  auto corpus = [](const std::string& name) {
+    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string found = corpus("regression-c9048a042607");
+  ASSERT_FALSE(found.empty());
+  expect_bad(write("regression-c9048a042607.vdb", found), "corrupt metadata");
+
+  const std::string bunny = corpus("bunny_8.vdb");
+  auto with = [&](std::size_t at, std::uint32_t value) {
+    std::string b = bunny;
+    std::memcpy(&b[at], &value, sizeof value);
+    return b;
+  };
+  const std::size_t name = bunny.find("class"), table = bunny.find("__delayedload");
+  ASSERT_NE(name, std::string::npos);
+  ASSERT_NE(table, std::string::npos);
+  expect_bad(write("name.vdb", with(name - 4, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("value.vdb", with(table + 13, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("leaves.vdb", with(table + 17, 0xfffffff0u)), "leaves, more than the file holds");
+}

@@ -19,23 +19,30 @@
 // zlib: compressBound), present in full in the file, and for blosc its header must agree with both sizes
 // (blosc_cbuffer_validate) before it is decompressed. A block that fails is an openvdb::IoError, which the
 // reader turns into a one-line Error naming the file (exit code 2). A valid file reads exactly as before.
-// Whether interposition took effect depends on how the program was linked and loaded, so require_vdb_guard()
-// proves it once per process: it writes a one-leaf grid with blosc and with zlib into memory, reads it back and
-// checks that these functions read the blocks and that the values came back.
+// Metadata is read the same way (see read_meta_map below). Whether interposition took effect depends on how the
+// program was linked and loaded, so require_vdb_guard() proves it once per process: it writes a one-leaf grid with
+// blosc and with zlib into memory, reads it back and checks that these functions read its metadata and blocks and
+// that the values came back.
 #include "vdb_guard.h"
 
 #include <blosc.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <vector>
 
 #include <openvdb/Exceptions.h>
+#include <openvdb/Metadata.h>
+#include <openvdb/MetaMap.h>
 #include <openvdb/io/Compression.h>
+#include <openvdb/io/DelayedLoadMetadata.h>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
@@ -97,6 +104,116 @@ void read_block(std::istream& is, char* data, std::size_t expected, Codec codec)
   }
 }
 
+// Metadata. OpenVDB 10 also allocates whatever a metadata string or value claims (up to 4 GiB each, from a file
+// of a few KB: fuzzing found a 1.7 GB name) and the delayed-load table every file carries sizes its vectors by a
+// leaf count from the file. MetaMap::readMeta and DelayedLoadMetadata::readValue are exported and called through
+// the library's linkage table and vtable, so they are replaced the same way: every length is checked against the
+// bytes the file has left (and the table's leaf count against what the file can hold: 64 bytes of mask a leaf)
+// before anything is allocated.
+std::atomic<unsigned long> g_metamaps{0};
+
+[[noreturn]] void refuse_meta(const std::string& what) { OPENVDB_THROW(openvdb::IoError, "corrupt metadata: " << what); }
+
+// Bytes left in `is` after its position.
+std::uint64_t bytes_left(std::istream& is) {
+  const std::streampos here = is.tellg();
+  if (here < 0) refuse_meta("the file ends in its metadata");
+  is.seekg(0, std::ios_base::end);
+  const std::streampos end = is.tellg();
+  is.seekg(here);
+  return end > here ? std::uint64_t(end - here) : 0;
+}
+
+std::uint32_t read_u32(std::istream& is) {
+  std::uint32_t v = 0;
+  if (!is.read(reinterpret_cast<char*>(&v), sizeof v)) refuse_meta("the file ends in its metadata");
+  return v;
+}
+
+std::string read_string(std::istream& is) {
+  const std::uint32_t n = read_u32(is);
+  if (n > bytes_left(is)) refuse_meta("a name of " + std::to_string(n) + " bytes, more than the file has left");
+  std::string s(n, '\0');
+  if (n > 0 && !is.read(&s[0], n)) refuse_meta("the file ends in its metadata");
+  return s;
+}
+
+void read_meta_map(openvdb::MetaMap& map, std::istream& is) {
+  g_metamaps.fetch_add(1, std::memory_order_relaxed);
+  map.clearMetadata();
+  const std::uint32_t count = read_u32(is);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::string name = read_string(is);
+    const std::string type = read_string(is);
+    const std::uint32_t size = read_u32(is);  // the value's length, read again by Metadata::read
+    if (size > bytes_left(is))
+      refuse_meta("'" + name + "' claims " + std::to_string(size) + " bytes, more than the file has left");
+    is.seekg(-std::streamoff(sizeof size), std::ios_base::cur);
+    if (openvdb::Metadata::isRegisteredType(type)) {
+      openvdb::Metadata::Ptr value = openvdb::Metadata::createMetadata(type);
+      value->read(is);
+      if (!is) refuse_meta("the file ends in its metadata");
+      map.insertMeta(name, *value);
+    } else {
+      openvdb::UnknownMetadata value(type);
+      value.read(is);
+      if (!is) refuse_meta("the file ends in its metadata");
+      if (type.compare(0, 2, "__") != 0) map.insertMeta(name, value);  // "__" types are temporary, as in OpenVDB
+    }
+  }
+}
+
+// The delayed-load table: a leaf count, then a table of one byte a leaf and one of 8 bytes a leaf (the second
+// may be absent: length 0xffffffff), each raw (length 0) or blosc compressed (its length), all within `size`.
+void read_delayed_load(openvdb::io::DelayedLoadMetadata& table, std::istream& is, std::uint32_t size) {
+  table.clear();
+  if (size == 0) return;
+  const std::streampos start = is.tellg();
+  const std::uint64_t file = std::uint64_t(std::max<std::streamoff>(start, 0)) + bytes_left(is);
+  if (size > bytes_left(is)) refuse_meta("the delayed-load table is longer than the file");
+  std::uint64_t used = 0;
+  auto take = [&](void* to, std::uint64_t n) {
+    if (used + n > size) refuse_meta("the delayed-load table overruns its " + std::to_string(size) + " bytes");
+    if (n > 0 && !is.read(static_cast<char*>(to), std::streamsize(n))) refuse_meta("the file ends in its metadata");
+    used += n;
+  };
+  std::uint32_t count = 0, length = 0;
+  take(&count, 4);
+  if (count > file / 64 + 1)
+    refuse_meta("the delayed-load table claims " + std::to_string(count) + " leaves, more than the file holds");
+  auto read_table = [&](std::size_t item, std::uint32_t packed_length) {
+    std::vector<char> raw(std::size_t(count) * item);
+    if (packed_length == 0) {
+      take(raw.data(), raw.size());
+      return raw;
+    }
+    std::vector<char> packed(packed_length);
+    take(packed.data(), packed.size());
+    std::size_t nbytes = 0;
+    if (blosc_cbuffer_validate(packed.data(), packed.size(), &nbytes) != 0 || nbytes != raw.size())
+      refuse_meta("a blosc block of the delayed-load table does not match its length or its leaf count");
+    if (!raw.empty() && blosc_decompress_ctx(packed.data(), raw.data(), raw.size(), 1) != int(raw.size()))
+      refuse_meta("a blosc block of the delayed-load table does not decompress");
+    return raw;
+  };
+  take(&length, 4);
+  const std::vector<char> masks = read_table(sizeof(openvdb::io::DelayedLoadMetadata::MaskType), length);
+  table.resizeMask(count);
+  for (std::uint32_t i = 0; i < count; ++i) table.setMask(i, openvdb::io::DelayedLoadMetadata::MaskType(masks[i]));
+  take(&length, 4);
+  if (length != std::numeric_limits<std::uint32_t>::max()) {
+    using Size = openvdb::io::DelayedLoadMetadata::CompressedSizeType;
+    const std::vector<char> sizes = read_table(sizeof(Size), length);
+    table.resizeCompressedSize(count);
+    for (std::uint32_t i = 0; i < count; ++i) {
+      Size v;
+      std::memcpy(&v, sizes.data() + std::size_t(i) * sizeof v, sizeof v);
+      table.setCompressedSize(i, v);
+    }
+  }
+  if (used < size && !is.ignore(std::streamsize(size - used))) refuse_meta("the file ends in its metadata");
+}
+
 // One leaf's worth of values (some active, some not, so that mask compression is used), written with
 // `compression` into memory and read back through OpenVDB's own stream reader.
 bool round_trip(std::uint32_t compression) {
@@ -106,11 +223,11 @@ bool round_trip(std::uint32_t compression) {
   openvdb::io::Stream writer(os);
   writer.setCompression(compression);
   writer.write({grid});
-  const unsigned long before = g_blocks.load();
+  const unsigned long before = g_blocks.load(), maps_before = g_metamaps.load();
   std::istringstream is(os.str(), std::ios::binary);
   openvdb::io::Stream reader(is);
   auto grids = reader.getGrids();
-  if (g_blocks.load() == before || !grids || grids->size() != 1) return false;
+  if (g_blocks.load() == before || g_metamaps.load() == maps_before || !grids || grids->size() != 1) return false;
   auto back = openvdb::gridPtrCast<openvdb::FloatGrid>(grids->front());
   if (!back || back->activeVoxelCount() != grid->activeVoxelCount()) return false;
   for (auto it = grid->cbeginValueOn(); it; ++it)
@@ -142,8 +259,8 @@ unsigned long vdb_guard_blocks_read() { return g_blocks.load(); }
 
 }  // namespace chokeloops
 
-// The two readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h). `numBytes` is the size of
-// the buffer at `data` (null: skip the block).
+// The readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h, DelayedLoadMetadata.h and
+// MetaMap.h). `numBytes` is the size of the buffer at `data` (null: skip the block).
 namespace openvdb {
 OPENVDB_USE_VERSION_NAMESPACE
 namespace OPENVDB_VERSION_NAME {
@@ -157,6 +274,13 @@ void unzipFromStream(std::istream& is, char* data, size_t numBytes) {
   chokeloops::read_block(is, data, numBytes, chokeloops::Codec::zip);
 }
 
+void DelayedLoadMetadata::readValue(std::istream& is, Index32 numBytes) {
+  chokeloops::read_delayed_load(*this, is, numBytes);
+}
+
 }  // namespace io
+
+void MetaMap::readMeta(std::istream& is) { chokeloops::read_meta_map(*this, is); }
+
 }  // namespace OPENVDB_VERSION_NAME
 }  // namespace openvdb
