@@ -349,4 +349,10 @@ TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
   expect_bad(write("name.vdb", with(name - 4, 0x7ffffff0u)), "more than the file has left");
   expect_bad(write("value.vdb", with(table + 13, 0x7ffffff0u)), "more than the file has left");
   expect_bad(write("leaves.vdb", with(table + 17, 0xfffffff0u)), "leaves, more than the file holds");
+  // the names OpenVDB reads with its grid descriptors and transforms
+  const std::size_t type = bunny.find("Tree_float_5_4_3"), map = bunny.find("UniformScaleTranslateMap");
+  ASSERT_NE(type, std::string::npos);
+  ASSERT_NE(map, std::string::npos);
+  expect_bad(write("type.vdb", with(type - 4, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("map.vdb", with(map - 4, 0x7ffffff0u)), "more than the file has left");
 }

@@ -19,13 +19,14 @@
 // zlib: compressBound), present in full in the file, and for blosc its header must agree with both sizes
 // (blosc_cbuffer_validate) before it is decompressed. A block that fails is an openvdb::IoError, which the
 // reader turns into a one-line Error naming the file (exit code 2). A valid file reads exactly as before.
-// Metadata is read the same way (see read_meta_map below). Whether interposition took effect depends on how the
-// program was linked and loaded, so require_vdb_guard() proves it once per process: it writes a one-leaf grid with
-// blosc and with zlib into memory, reads it back and checks that these functions read its metadata and blocks and
-// that the values came back.
+// Metadata, and the names OpenVDB reads with it, are guarded the same way (read_meta_map, check_names below).
+// Whether interposition took effect depends on how the program was linked and loaded, so require_vdb_guard()
+// proves it once per process: it writes a one-leaf grid with blosc and with zlib into memory, reads it back and
+// checks that these functions read its metadata and blocks and that the values came back.
 #include "vdb_guard.h"
 
 #include <blosc.h>
+#include <dlfcn.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -43,6 +44,8 @@
 #include <openvdb/MetaMap.h>
 #include <openvdb/io/Compression.h>
 #include <openvdb/io/DelayedLoadMetadata.h>
+#include <openvdb/io/GridDescriptor.h>
+#include <openvdb/math/Transform.h>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
@@ -214,6 +217,28 @@ void read_delayed_load(openvdb::io::DelayedLoadMetadata& table, std::istream& is
   if (used < size && !is.ignore(std::streamsize(size - used))) refuse_meta("the file ends in its metadata");
 }
 
+// Names OpenVDB reads inside functions that set private members and so cannot be rewritten here: a grid
+// descriptor's names (GridDescriptor::read) and a transform's type (Transform::read). Their lengths are checked
+// against the file, the stream is put back, and OpenVDB's own definition (the next one, dlsym RTLD_NEXT) reads.
+void check_names(std::istream& is, int count) {
+  const std::streampos start = is.tellg();
+  for (int i = 0; i < count; ++i) {
+    const std::uint32_t n = read_u32(is);
+    if (n > bytes_left(is)) refuse_meta("a name of " + std::to_string(n) + " bytes, more than the file has left");
+    is.seekg(std::streamoff(n), std::ios_base::cur);
+  }
+  is.seekg(start);
+}
+
+template <class Fn>
+Fn openvdb_definition(const std::string& mangled_tail) {  // after "_ZN7openvdb" and the version namespace
+  const std::string ns = OPENVDB_PREPROC_STRINGIFY(OPENVDB_VERSION_NAME);
+  const std::string symbol = "_ZN7openvdb" + std::to_string(ns.size()) + ns + mangled_tail;
+  void* f = dlsym(RTLD_NEXT, symbol.c_str());
+  if (!f) OPENVDB_THROW(openvdb::RuntimeError, "OpenVDB's " << symbol << " is not found");
+  return reinterpret_cast<Fn>(f);
+}
+
 // One leaf's worth of values (some active, some not, so that mask compression is used), written with
 // `compression` into memory and read back through OpenVDB's own stream reader.
 bool round_trip(std::uint32_t compression) {
@@ -259,8 +284,8 @@ unsigned long vdb_guard_blocks_read() { return g_blocks.load(); }
 
 }  // namespace chokeloops
 
-// The readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h, DelayedLoadMetadata.h and
-// MetaMap.h). `numBytes` is the size of the buffer at `data` (null: skip the block).
+// The readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h, DelayedLoadMetadata.h,
+// GridDescriptor.h, math/Transform.h and MetaMap.h). `numBytes` is the size of the buffer at `data` (null: skip the block).
 namespace openvdb {
 OPENVDB_USE_VERSION_NAMESPACE
 namespace OPENVDB_VERSION_NAME {
@@ -278,7 +303,21 @@ void DelayedLoadMetadata::readValue(std::istream& is, Index32 numBytes) {
   chokeloops::read_delayed_load(*this, is, numBytes);
 }
 
+GridBase::Ptr GridDescriptor::read(std::istream& is) {
+  chokeloops::check_names(is, getFormatVersion(is) >= OPENVDB_FILE_VERSION_GRID_INSTANCING ? 3 : 2);
+  using Fn = GridBase::Ptr (*)(GridDescriptor*, std::istream&);  // the Itanium ABI passes `this` first
+  static const Fn next = chokeloops::openvdb_definition<Fn>("2io14GridDescriptor4readERSi");
+  return next(this, is);
+}
+
 }  // namespace io
+
+void math::Transform::read(std::istream& is) {
+  chokeloops::check_names(is, 1);
+  using Fn = void (*)(math::Transform*, std::istream&);
+  static const Fn next = chokeloops::openvdb_definition<Fn>("4math9Transform4readERSi");
+  next(this, is);
+}
 
 void MetaMap::readMeta(std::istream& is) { chokeloops::read_meta_map(*this, is); }
 
