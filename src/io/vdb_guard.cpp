@@ -175,8 +175,11 @@ void read_delayed_load(openvdb::io::DelayedLoadMetadata& table, std::istream& is
   const std::uint64_t file = std::uint64_t(std::max<std::streamoff>(start, 0)) + bytes_left(is);
   if (size > bytes_left(is)) refuse_meta("the delayed-load table is longer than the file");
   std::uint64_t used = 0;
-  auto take = [&](void* to, std::uint64_t n) {
+  auto room = [&](std::uint64_t n) {  // before anything of that size is allocated
     if (used + n > size) refuse_meta("the delayed-load table overruns its " + std::to_string(size) + " bytes");
+  };
+  auto take = [&](void* to, std::uint64_t n) {
+    room(n);
     if (n > 0 && !is.read(static_cast<char*>(to), std::streamsize(n))) refuse_meta("the file ends in its metadata");
     used += n;
   };
@@ -185,6 +188,7 @@ void read_delayed_load(openvdb::io::DelayedLoadMetadata& table, std::istream& is
   if (count > file / 64 + 1)
     refuse_meta("the delayed-load table claims " + std::to_string(count) + " leaves, more than the file holds");
   auto read_table = [&](std::size_t item, std::uint32_t packed_length) {
+    room(packed_length == 0 ? std::uint64_t(count) * item : packed_length);
     std::vector<char> raw(std::size_t(count) * item);
     if (packed_length == 0) {
       take(raw.data(), raw.size());
