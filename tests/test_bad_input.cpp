@@ -360,3 +360,23 @@ TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
   expect_bad(write("type.vdb", with(type - 4, 0x7ffffff0u)), "more than the file has left");
   expect_bad(write("map.vdb", with(map - 4, 0x7ffffff0u)), "more than the file has left");
 }
+
+TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
+  // Found by fuzzing, once metadata was guarded: OpenVDB 10 reads a tree's topology without looking at the stream,
+  // so a count of 2^32 children went on allocating nodes past the end of a 33 KB file (1.4 GB). The guard makes the
+  // stream throw at its end. OpenVDB itself first prints a warning about the file's buffer count to stderr, so the
+  // message is checked through the library and the CLI's exit code only.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f797ba18d54e", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty());
+  const std::string path = write("children.vdb", bytes);
+  try {
+    read_vdb_float_grid(path, "");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find("children.vdb"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(run_cli("'" + path + "' -o '" + out + "' --resolution 16").code, 2);
+}
