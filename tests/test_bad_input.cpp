@@ -364,8 +364,7 @@ TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
 TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
   // Found by fuzzing, once metadata was guarded: OpenVDB 10 reads a tree's topology without looking at the stream,
   // so a count of 2^32 children went on allocating nodes past the end of a 33 KB file (1.4 GB). The guard makes the
-  // stream throw at its end. OpenVDB itself first prints a warning about the file's buffer count to stderr, so the
-  // message is checked through the library and the CLI's exit code only.
+  // stream throw at its end; this input is now refused before that, by the root check (its buffer count is not 1).
   std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f797ba18d54e", std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_FALSE(bytes.empty());
@@ -377,6 +376,16 @@ TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
     EXPECT_EQ(e.exit_code, 2);
     EXPECT_NE(std::string(e.what()).find("children.vdb"), std::string::npos) << e.what();
     EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("corrupt"), std::string::npos) << e.what();
   }
   EXPECT_EQ(run_cli("'" + path + "' -o '" + out + "' --resolution 16").code, 2);
+}
+
+TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
+  // Found by fuzzing (UBSan): OpenVDB's header code reads a root tile's active flag straight into a bool, and a
+  // byte other than 0 or 1 there is undefined behaviour. The guard checks the float grid's root tiles first.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f1b5600801d0", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty());
+  expect_bad(write("tile.vdb", bytes), "corrupt metadata");  // its buffer count, checked before the tiles
 }

@@ -239,6 +239,48 @@ void check_names(std::istream& is, int count) {
   is.seekg(start);
 }
 
+// The root node. OpenVDB's header code reads a root tile's active flag straight into a bool: a byte other than 0
+// or 1 there is undefined behaviour (UBSan found it). Within a VdbRootCheck, each grid descriptor OpenVDB reads is
+// noted, and when the transform of a float grid that is not an instance has been read, what follows is that
+// grid's topology: a buffer count (1 since file format 222), the background, the tile and child counts and the
+// tiles (coordinates, value, flag), which are checked here first.
+struct GridPlace {
+  const std::istream* stream;
+  std::int64_t grid_pos, block_pos;
+  bool float_grid;
+};
+thread_local std::vector<GridPlace>* t_places = nullptr;
+
+void note_grid(const std::istream& is, const openvdb::io::GridDescriptor& d) {
+  if (t_places) t_places->push_back({&is, d.getGridPos(), d.getBlockPos(), d.gridType() == "Tree_float_5_4_3" && !d.isInstance()});
+}
+
+void check_float_root(std::istream& is, std::streampos transform_at) {
+  if (!t_places || openvdb::io::getFormatVersion(is) < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) return;
+  const std::int64_t at = std::int64_t(transform_at);
+  bool float_grid = false;
+  for (const GridPlace& p : *t_places)
+    if (p.stream == &is && p.grid_pos <= at && at < p.block_pos) float_grid = p.float_grid;
+  if (!float_grid) return;
+  const std::streampos start = is.tellg();
+  const std::uint32_t buffers = read_u32(is);
+  if (buffers != 1) refuse_meta("the tree claims " + std::to_string(buffers) + " buffers, not 1");
+  is.seekg(sizeof(float), std::ios_base::cur);  // the background
+  const std::uint32_t tiles = read_u32(is);
+  read_u32(is);  // children
+  constexpr std::uint64_t kTile = 3 * 4 + sizeof(float) + 1;
+  if (std::uint64_t(tiles) * kTile > bytes_left(is))
+    refuse_meta("the root claims " + std::to_string(tiles) + " tiles, more than the file holds");
+  for (std::uint32_t i = 0; i < tiles; ++i) {
+    char tile[kTile];
+    is.read(tile, kTile);
+    if (tile[kTile - 1] != 0 && tile[kTile - 1] != 1)
+      refuse_meta("a root tile's active flag is " + std::to_string(int(static_cast<unsigned char>(tile[kTile - 1]))) +
+                  ", neither 0 nor 1");
+  }
+  is.seekg(start);
+}
+
 template <class Fn>
 Fn openvdb_definition(const std::string& mangled_tail) {  // after "_ZN7openvdb" and the version namespace
   const std::string ns = OPENVDB_PREPROC_STRINGIFY(OPENVDB_VERSION_NAME);
@@ -291,6 +333,14 @@ void require_vdb_guard(const std::string& path) {
 
 unsigned long vdb_guard_blocks_read() { return g_blocks.load(); }
 
+VdbRootCheck::VdbRootCheck() {
+  if (!t_places) t_places = new std::vector<GridPlace>();
+}
+VdbRootCheck::~VdbRootCheck() {
+  delete t_places;
+  t_places = nullptr;
+}
+
 }  // namespace chokeloops
 
 // The readers OpenVDB's own calls reach (declared in openvdb/io/Compression.h, DelayedLoadMetadata.h,
@@ -316,7 +366,9 @@ GridBase::Ptr GridDescriptor::read(std::istream& is) {
   chokeloops::check_names(is, getFormatVersion(is) >= OPENVDB_FILE_VERSION_GRID_INSTANCING ? 3 : 2);
   using Fn = GridBase::Ptr (*)(GridDescriptor*, std::istream&);  // the Itanium ABI passes `this` first
   static const Fn next = chokeloops::openvdb_definition<Fn>("2io14GridDescriptor4readERSi");
-  return next(this, is);
+  GridBase::Ptr grid = next(this, is);
+  chokeloops::note_grid(is, *this);
+  return grid;
 }
 
 }  // namespace io
@@ -325,7 +377,9 @@ void math::Transform::read(std::istream& is) {
   chokeloops::check_names(is, 1);
   using Fn = void (*)(math::Transform*, std::istream&);
   static const Fn next = chokeloops::openvdb_definition<Fn>("4math9Transform4readERSi");
+  const std::streampos at = is.tellg();
   next(this, is);
+  chokeloops::check_float_root(is, at);
 }
 
 void MetaMap::readMeta(std::istream& is) { chokeloops::read_meta_map(*this, is); }

@@ -12,4 +12,14 @@ void require_vdb_guard(const std::string& path);
 // How many value blocks the guarded reader has read or skipped in this process (for tests).
 unsigned long vdb_guard_blocks_read();
 
+// While one of these lives on a thread, the grids OpenVDB's file reader opens on that thread are noted, and the
+// root node of every non-instance float grid it then reads is checked before OpenVDB reads it (vdb_guard.cpp).
+class VdbRootCheck {
+ public:
+  VdbRootCheck();
+  ~VdbRootCheck();
+  VdbRootCheck(const VdbRootCheck&) = delete;
+  VdbRootCheck& operator=(const VdbRootCheck&) = delete;
+};
+
 }  // namespace chokeloops
