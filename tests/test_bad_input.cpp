@@ -12,8 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
+#include <openvdb/io/Compression.h>
 #include <openvdb/io/File.h>
 
 #include "chokeloops/field/levelset.h"
@@ -272,4 +274,118 @@ TEST_F(BadInput, FuzzFlatClosedMeshIsNotOriented) {
   CliRun run = run_cli("'" + flat + "' -o '" + out + "' --resolution 16");
   EXPECT_TRUE(run.code == 0 || run.code == 2) << run.err;
   EXPECT_LE(std::count(run.err.begin(), run.err.end(), '\n'), 3) << run.err;
+}
+
+TEST_F(BadInput, FuzzVdbBlockLongerThanItsBuffer) {
+  // Found by fuzzing: one changed byte in the length of a value block of bunny_8.vdb made OpenVDB 10's reader
+  // copy more raw bytes than the leaf's buffer holds (a heap overflow inside the library). The guard of
+  // src/io/vdb_guard.cpp checks each block before OpenVDB's buffer sees it.
+  // regression-7fd0598244cf: bunny_8.vdb with the top byte of its first leaf's block length (1760 bytes of blosc)
+  // set to 0xff, which makes it a raw block of 7e16 bytes for a 2048-byte buffer; 0e298147d4e5: the fuzzer's
+  // crossover doing the same; 5adf9289733f: a length that made OpenVDB allocate 4 GiB.
+  for (const char* name : {"regression-7fd0598244cf", "regression-0e298147d4e5", "regression-5adf9289733f"}) {
+    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_FALSE(bytes.empty()) << name;
+    expect_bad(write(std::string(name) + ".vdb", bytes), "corrupt value block");
+  }
+
+  // The same for each way a block's length or blosc header can lie, in a level set written here with blosc.
+  ensure_openvdb_initialized();
+  auto g = openvdb::FloatGrid::create(3.f);
+  g->setName("sdf");
+  for (int i = 0; i < 64; ++i) g->tree().setValue(openvdb::Coord(i % 8, i / 8, 1), 0.1f * float(i % 7) - 0.3f);
+  const std::string good = (dir / "good.vdb").string();
+  {
+    openvdb::io::File file(good);
+    file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
+    file.write({g});
+  }
+  std::ifstream gin(good, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(gin)), std::istreambuf_iterator<char>());
+  // A blosc block: its 8-byte length, then blosc's header (format version 2) whose bytes 12-15 repeat the length.
+  std::size_t at = std::string::npos;
+  for (std::size_t p = 0; p + 24 <= bytes.size() && at == std::string::npos; ++p) {
+    std::int64_t length;
+    std::uint32_t header_length;
+    std::memcpy(&length, bytes.data() + p, 8);
+    std::memcpy(&header_length, bytes.data() + p + 20, 4);
+    if (length > 16 && length < 1 << 16 && bytes[p + 8] == 2 && header_length == std::uint64_t(length)) at = p;
+  }
+  ASSERT_NE(at, std::string::npos);
+  auto with = [&](std::size_t offset, auto value) {
+    std::string b = bytes;
+    std::memcpy(&b[at + offset], &value, sizeof value);
+    return b;
+  };
+  EXPECT_NO_THROW(read_vdb_float_grid(good, "sdf"));
+  expect_bad(write("raw.vdb", with(0, std::int64_t(-100000))), "claims 100000 raw bytes");
+  expect_bad(write("huge.vdb", with(0, std::int64_t(1) << 40)), "compressed bytes");
+  expect_bad(write("min.vdb", with(0, std::numeric_limits<std::int64_t>::min())), "corrupt value block");
+  expect_bad(write("nbytes.vdb", with(12, std::uint32_t(1) << 20)), "blosc block's header");
+  expect_bad(write("cbytes.vdb", with(20, std::uint32_t(1) << 20)), "blosc block's header");
+}
+
+TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
+  // Found by fuzzing, once blocks were guarded: a metadata name whose length claims 1.7 GB made OpenVDB 10 allocate
+  // it (regression-c9048a042607). Names, values and the delayed-load table are now checked against the file first.
+  auto corpus = [](const std::string& name) {
+    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  // regression-9059e41ce871: a blosc table length in the delayed-load table of 1.7 GB, allocated by the guard itself
+  // before it was checked against the table's own length.
+  for (const char* found_name : {"regression-c9048a042607", "regression-9059e41ce871"}) {
+    const std::string found = corpus(found_name);
+    ASSERT_FALSE(found.empty()) << found_name;
+    expect_bad(write(std::string(found_name) + ".vdb", found), "corrupt metadata");
+  }
+
+  const std::string bunny = corpus("bunny_8.vdb");
+  auto with = [&](std::size_t at, std::uint32_t value) {
+    std::string b = bunny;
+    std::memcpy(&b[at], &value, sizeof value);
+    return b;
+  };
+  const std::size_t name = bunny.find("class"), table = bunny.find("__delayedload");
+  ASSERT_NE(name, std::string::npos);
+  ASSERT_NE(table, std::string::npos);
+  expect_bad(write("name.vdb", with(name - 4, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("value.vdb", with(table + 13, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("leaves.vdb", with(table + 17, 0xfffffff0u)), "leaves, more than the file holds");
+  // the names OpenVDB reads with its grid descriptors and transforms
+  const std::size_t type = bunny.find("Tree_float_5_4_3"), map = bunny.find("UniformScaleTranslateMap");
+  ASSERT_NE(type, std::string::npos);
+  ASSERT_NE(map, std::string::npos);
+  expect_bad(write("type.vdb", with(type - 4, 0x7ffffff0u)), "more than the file has left");
+  expect_bad(write("map.vdb", with(map - 4, 0x7ffffff0u)), "more than the file has left");
+}
+
+TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
+  // Found by fuzzing, once metadata was guarded: OpenVDB 10 reads a tree's topology without looking at the stream,
+  // so a count of 2^32 children went on allocating nodes past the end of a 33 KB file (1.4 GB). The guard makes the
+  // stream throw at its end; this input is now refused before that, by the root check (its buffer count is not 1).
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f797ba18d54e", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty());
+  const std::string path = write("children.vdb", bytes);
+  try {
+    read_vdb_float_grid(path, "");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find("children.vdb"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("corrupt"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(run_cli("'" + path + "' -o '" + out + "' --resolution 16").code, 2);
+}
+
+TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
+  // Found by fuzzing (UBSan): OpenVDB's header code reads a root tile's active flag straight into a bool, and a
+  // byte other than 0 or 1 there is undefined behaviour. The guard checks the float grid's root tiles first.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f1b5600801d0", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty());
+  expect_bad(write("tile.vdb", bytes), "corrupt metadata");  // its buffer count, checked before the tiles
 }

@@ -324,3 +324,27 @@ TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
   EXPECT_EQ(m.atoms.size(), 2u);
   fs::remove_all(dir);
 }
+
+// Found by fuzzing: gemmi begins a record inside a line after a NUL or a byte above 0x7f, so a short SSBOND there
+// escaped the padding to 80 columns and gemmi read its distance past the record (heap overflow). Refused with
+// exit code 2 and one line; a long ASCII line, which gemmi skips to its end, still reads.
+TEST(MoleculeInput, FuzzConnectionRecordBeginningInsideALineIsRefused) {
+  fs::path dir = fs::temp_directory_path() / ("chokeloops_mol_conn_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return (dir / name).string();
+  };
+  const std::string atom = "ATOM      1  CA  ALA A   1      11.104   6.134  -6.504  1.00  0.00           C\n";
+  std::ifstream r(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/pdb/regression-13d3455ba14d", std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(r)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found.empty());
+  const std::string ssbond = "SSBOND   1 CYS A    1    CYS A    1";
+  const std::string remark = "REMARK   1 " + std::string(115, 'x');  // 126 columns: gemmi reads 120
+  expect_refused(write("regression.pdb", found), "SSBOND, LINK or CISPEP record", dir / "out");
+  expect_refused(write("nul.pdb", atom + "REMARK x" + std::string(1, '\0') + "\n\xff" + ssbond + "\n"),
+                 "line 3 holds a NUL or a non-ASCII byte", dir / "out");
+  expect_refused(write("long.pdb", atom + remark + "\xff" + ssbond + "\n"), "line 2 holds", dir / "out");
+  EXPECT_EQ(read_molecule(write("ascii.pdb", atom + remark + ssbond + "\n")).atoms.size(), 1u);
+  fs::remove_all(dir);
+}

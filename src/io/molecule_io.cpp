@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iterator>
 #include <filesystem>
 #include <fstream>
@@ -211,12 +212,13 @@ void check_pdb_for_gemmi(const std::string& text, const std::string& path) {
 // the string's length (SSBOND's distance, columns 74-78, is read when the line is longer than 73: a heap
 // overflow on a 75-column line; found by fuzzing). Such records are padded with blanks to the 80 columns of the
 // format, which is what missing columns mean, and a NUL inside one (which would end gemmi's copy) becomes a blank.
+std::uint32_t id4(const char* s) {  // gemmi's ialpha4_id (the first four characters, case folded), same bits
+  auto u = [&](int i) { return std::uint32_t(int(s[i])); };
+  return (u(0) << 24 | u(1) << 16 | u(2) << 8 | u(3)) & ~0x20202020u;
+}
+const std::uint32_t kConn[] = {id4("SSBO"), id4("LINK"), id4("CISP")};
+
 int pad_connection_records(std::string& text) {
-  auto id4 = [](const char* s) {  // gemmi's ialpha4_id (the first four characters, case folded), same bits
-    auto u = [&](int i) { return std::uint32_t(int(s[i])); };
-    return (u(0) << 24 | u(1) << 16 | u(2) << 8 | u(3)) & ~0x20202020u;
-  };
-  static const std::uint32_t kConn[] = {id4("SSBO"), id4("LINK"), id4("CISP")};
   std::string out;
   int padded = 0;
   std::size_t pos = 0;
@@ -239,6 +241,32 @@ int pad_connection_records(std::string& text) {
   }
   if (padded) text.swap(out);
   return padded;
+}
+
+// gemmi does not split the text only at '\n': copy_line_from_stream takes at most 120 characters, ends a record at
+// a NUL and then skips the rest of the line, but that skip also stops at a NUL or at a byte above 0x7f (a negative
+// char), and gemmi's next record begins there, inside the line. A connection record beginning inside a line was not
+// padded above (found by fuzzing: "SSBO" after a NUL and a 0xff, then a heap overflow reading its distance), so a
+// file where gemmi would see one is refused; a PDB file has no NULs, and no record begins inside a line.
+void check_pdb_record_starts(const std::string& text, const std::string& path) {
+  const std::size_t n = text.size();
+  std::size_t cur = 0;
+  while (cur < n) {
+    const std::size_t start = cur, take = std::min<std::size_t>(120, n - cur);
+    const void* nl = std::memchr(text.data() + cur, '\n', take);
+    cur += nl ? std::size_t(static_cast<const char*>(nl) - (text.data() + cur)) + 1 : take;
+    const std::size_t len = strnlen(text.data() + start, cur - start);  // gemmi's strlen
+    if (len == 0) break;                                                  // gemmi stops at an empty record
+    if (start > 0 && text[start - 1] != '\n' && len >= 4 &&
+        std::find(std::begin(kConn), std::end(kConn), id4(text.data() + start)) != std::end(kConn))
+      fail(path, "line " + std::to_string(std::count(text.begin(), text.begin() + long(start), '\n') + 1) +
+                     " holds a NUL or a non-ASCII byte followed by a SSBOND, LINK or CISPEP record; not a PDB text file");
+    if (text[start + len - 1] != '\n')
+      while (cur < n) {
+        const signed char c = static_cast<signed char>(text[cur++]);
+        if (c <= 0 || c == '\n') break;
+      }
+  }
 }
 
 struct Radius {
@@ -303,6 +331,7 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
     } else {
       check_pdb_for_gemmi(text, path);
       pad_connection_records(text);
+      check_pdb_record_starts(text, path);
       st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
     }
   } catch (const Error&) {

@@ -13,6 +13,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/blocked_range.h>
 
+#include "vdb_guard.h"
+
 namespace chokeloops {
 namespace {
 
@@ -47,17 +49,27 @@ std::string one_line(std::string s) {
   return s;
 }
 
-// Opens the file (no delayed loading: the grid must not depend on the file staying unchanged).
+// Why OpenVDB failed, for the message. The guard (vdb_guard.cpp) makes the file's stream throw when a read fails;
+// libstdc++'s message for that says only "basic_ios::clear: iostream error", so it is named for what it means.
+std::string reason(const std::exception& e) {
+  const std::string what = e.what();
+  if (what.rfind("basic_ios::clear", 0) == 0) return "the file ends inside its data";
+  return one_line(what);
+}
+
+// Opens the file (no delayed loading: the grid must not depend on the file staying unchanged). Every value
+// block is then read through the guard of vdb_guard.cpp, which refuses a corrupt one before OpenVDB's buffers.
 std::unique_ptr<openvdb::io::File> open_vdb(const std::string& path) {
   ensure_openvdb_initialized();
   check_readable(path);
+  require_vdb_guard(path);
   auto file = std::make_unique<openvdb::io::File>(path);
   try {
     file->open(/*delayLoad=*/false);
   } catch (const openvdb::Exception& e) {
     throw Error(quoted(path) + ": not a readable VDB file (" + one_line(e.what()) + ")");
   } catch (const std::exception& e) {
-    throw Error(quoted(path) + ": not a readable VDB file (" + one_line(e.what()) + ")");
+    throw Error(quoted(path) + ": not a readable VDB file (" + reason(e) + ")");
   }
   return file;
 }
@@ -83,6 +95,8 @@ std::vector<VdbGridInfo> list_open(openvdb::io::File& file, const std::string& p
     }
   } catch (const openvdb::Exception& e) {
     throw Error(quoted(path) + ": corrupt VDB file (" + one_line(e.what()) + ")");
+  } catch (const std::exception& e) {
+    throw Error(quoted(path) + ": corrupt VDB file (" + reason(e) + ")");
   }
   return out;
 }
@@ -128,6 +142,7 @@ std::vector<VdbGridInfo> list_vdb_grids(const std::string& path) {
 }
 
 openvdb::FloatGrid::Ptr read_vdb_float_grid(const std::string& path, const std::string& grid_name) {
+  VdbRootCheck root_check;  // the float grid's root node is checked before OpenVDB reads it
   auto file = open_vdb(path);
   auto grids = list_open(*file, path);
   std::string chosen;
@@ -151,6 +166,8 @@ openvdb::FloatGrid::Ptr read_vdb_float_grid(const std::string& path, const std::
     base = file->readGrid(chosen);
   } catch (const openvdb::Exception& e) {
     throw Error(quoted(path) + ": cannot read grid '" + chosen + "' (" + one_line(e.what()) + ")");
+  } catch (const std::exception& e) {
+    throw Error(quoted(path) + ": cannot read grid '" + chosen + "' (" + reason(e) + ")");
   }
   file->close();
   auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
