@@ -23,6 +23,17 @@ std::int64_t start_of_sheet(const detail::FloodBox& box, const std::array<int, 3
   return best;
 }
 
+// Calls fn(local index) for each of the 14 Freudenthal neighbours of box vertex p that lie in the box.
+template <class Fn>
+void for_box_neighbours(const detail::FloodBox& box, const std::array<int, 3>& p, Fn&& fn) {
+  for (int k = 0; k < 14; ++k) {
+    const auto o = freudenthal::neighbor_offset(k);
+    const std::array<int, 3> u{p[0] + o[0], p[1] + o[1], p[2] + o[2]};
+    if (u[0] < 0 || u[1] < 0 || u[2] < 0 || u[0] >= box.n[0] || u[1] >= box.n[1] || u[2] >= box.n[2]) continue;
+    fn(std::uint32_t(u[0] + box.ly * u[1] + box.lz * u[2]));
+  }
+}
+
 // Pieces of the region that hung on the shore only (a spur of a noisy surface, a pocket behind a fill)
 // would become components or cavities of their own once it changes side: they change side with it. A piece
 // is such when it lies inside the box without reaching its sides and holds neither seed piece.
@@ -32,38 +43,29 @@ void add_debris(const detail::FloodBox& box, const ScalarGrid& grid, std::vector
   for (std::uint32_t li : shore) mark[li] = 1;
   const std::size_t original = shore.size();
   for (std::size_t q = 0; q < original; ++q) {
-    const auto p0 = box.local(shore[q]);
-    for (int k0 = 0; k0 < 14; ++k0) {
-      const auto o0 = freudenthal::neighbor_offset(k0);
-      const std::array<int, 3> s{p0[0] + o0[0], p0[1] + o0[1], p0[2] + o0[2]};
-      if (s[0] < 0 || s[1] < 0 || s[2] < 0 || s[0] >= box.n[0] || s[1] >= box.n[1] || s[2] >= box.n[2]) continue;
-      const std::uint32_t start = std::uint32_t(s[0] + box.ly * s[1] + box.lz * s[2]);
+    for_box_neighbours(box, box.local(shore[q]), [&](std::uint32_t start) {
       const std::uint32_t z = box.zone(start);
-      if (mark[start] || (z != 1 && z != 2)) continue;
+      if (mark[start] || (z != 1 && z != 2)) return;
       std::vector<std::uint32_t> piece{start};
       mark[start] = 2;
       bool keep = false;  // reaches the box's side inside the grid, or holds a seed (level 0 of the flood)
       for (std::size_t i = 0; i < piece.size(); ++i) {
         const std::uint32_t li = piece[i];
-        if (((*box.cell)[li] >> 3) == 0) keep = true;
+        if (box.level(li) == 0) keep = true;
         const auto p = box.local(li);
         for (int a = 0; a < 3; ++a) {
           const int g = box.lo[a] + p[a];
           if ((p[a] == 0 || p[a] == box.n[a] - 1) && g != 0 && g != grid.dims[a] - 1) keep = true;
         }
-        for (int k = 0; k < 14; ++k) {
-          const auto o = freudenthal::neighbor_offset(k);
-          const std::array<int, 3> u{p[0] + o[0], p[1] + o[1], p[2] + o[2]};
-          if (u[0] < 0 || u[1] < 0 || u[2] < 0 || u[0] >= box.n[0] || u[1] >= box.n[1] || u[2] >= box.n[2]) continue;
-          const std::uint32_t ul = std::uint32_t(u[0] + box.ly * u[1] + box.lz * u[2]);
+        for_box_neighbours(box, p, [&](std::uint32_t ul) {
           const std::uint32_t zu = box.zone(ul);
-          if (mark[ul] || (zu != 1 && zu != 2)) continue;
+          if (mark[ul] || (zu != 1 && zu != 2)) return;
           mark[ul] = 2;
           piece.push_back(ul);
-        }
+        });
       }
       if (!keep) shore.insert(shore.end(), piece.begin(), piece.end());
-    }
+    });
   }
 }
 
@@ -90,15 +92,11 @@ Sheet collect_sheet(const detail::FloodBox& box, const ScalarGrid& grid, std::ui
         if (box_side) result = Sheet::AtGridBorder;
       }
     }
-    for (int k = 0; k < 14; ++k) {
-      const auto o = freudenthal::neighbor_offset(k);
-      const std::array<int, 3> u{p[0] + o[0], p[1] + o[1], p[2] + o[2]};
-      if (u[0] < 0 || u[1] < 0 || u[2] < 0 || u[0] >= box.n[0] || u[1] >= box.n[1] || u[2] >= box.n[2]) continue;
-      const std::uint32_t ul = std::uint32_t(u[0] + box.ly * u[1] + box.lz * u[2]);
-      if (seen[ul] || !member(ul)) continue;
+    for_box_neighbours(box, p, [&](std::uint32_t ul) {
+      if (seen[ul] || !member(ul)) return;
       seen[ul] = 1;
       sheet.push_back(ul);
-    }
+    });
   }
   return result;
 }

@@ -30,6 +30,7 @@ struct FloodBox {
   std::array<std::size_t, 2> seed_count{0, 0};
 
   std::uint32_t zone(std::uint32_t li) const { return (*cell)[li] & kZone; }
+  std::uint32_t level(std::uint32_t li) const { return (*cell)[li] >> 3; }  // 0: below the saddle
   bool on_border(std::uint32_t li) const { return (*cell)[li] & kBorder; }
   bool in_contact(std::uint32_t li) const { return (*contact)[li] != 0; }
   std::array<int, 3> local(std::uint32_t li) const {
