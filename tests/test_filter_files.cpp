@@ -14,6 +14,7 @@
 #include "chokeloops/filter/filter_file.h"
 #include "chokeloops/io/vdb_io.h"
 #include "chokeloops/io/volume_io.h"
+#include "temp_dir.h"
 #include "volume_images.h"
 
 using namespace chokeloops;
@@ -21,11 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("chokeloops_filter_" + name + "_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path temp_dir(const std::string& name) { return test::temp_dir("filter_" + name); }
 
 // Runs the CLI; returns its exit code and puts stderr in `err`.
 int cli(const std::string& args, std::string& err, const fs::path& dir) {

@@ -11,16 +11,13 @@
 #include <openvdb/tools/LevelSetSphere.h>
 
 #include "chokeloops/io/vdb_io.h"
+#include "temp_dir.h"
 
 using namespace chokeloops;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path temp_dir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("chokeloops_vdbio_" + name + "_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path temp_dir(const std::string& name) { return test::temp_dir("vdbio_" + name); }
 
 template <class F>
 std::string error_of(F&& f, int* code = nullptr) {

@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include "temp_dir.h"
 #include "chokeloops/analyze_molecule.h"
 
 namespace fs = std::filesystem;
@@ -227,12 +228,8 @@ void expect_refused(const std::string& path, const std::string& what, const fs::
 
 // Each bad file: Error with exit code 2 naming the file, and the CLI exits 2 with one line.
 TEST(MoleculeInput, BadInputExitsTwoWithOneLine) {
-  fs::path dir = fs::temp_directory_path() / ("chokeloops_mol_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(dir / name, std::ios::binary) << text;
-    return (dir / name).string();
-  };
+  const fs::path dir = test::temp_dir("mol");
+  auto write = [&](const std::string& name, const std::string& text) { return test::write_file(dir, name, text); };
   std::string line = "ATOM      1  CA  ALA A   1      11.104   6.134  -6.504  1.00  0.00           C\n";
   std::string good;
   for (int i = 0; i < 20; ++i) good += line;
@@ -268,12 +265,8 @@ TEST(MoleculeInput, BadInputExitsTwoWithOneLine) {
 // and expands an assembly's operator range "(1-N)" one name at a time. Such values are refused, with exit code 2
 // and one line, before gemmi sees them; ordinary values still read.
 TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
-  fs::path dir = fs::temp_directory_path() / ("chokeloops_mol_fuzz_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(dir / name, std::ios::binary) << text;
-    return (dir / name).string();
-  };
+  const fs::path dir = test::temp_dir("mol_fuzz");
+  auto write = [&](const std::string& name, const std::string& text) { return test::write_file(dir, name, text); };
   const std::string atoms =
       "loop_\n_atom_site.group_PDB\n_atom_site.id\n_atom_site.type_symbol\n_atom_site.label_atom_id\n"
       "_atom_site.label_alt_id\n_atom_site.label_comp_id\n_atom_site.label_asym_id\n_atom_site.label_seq_id\n"
@@ -329,12 +322,8 @@ TEST(MoleculeInput, FuzzIntegersBeyondIntAndHugeOperatorRangesAreRefused) {
 // escaped the padding to 80 columns and gemmi read its distance past the record (heap overflow). Refused with
 // exit code 2 and one line; a long ASCII line, which gemmi skips to its end, still reads.
 TEST(MoleculeInput, FuzzConnectionRecordBeginningInsideALineIsRefused) {
-  fs::path dir = fs::temp_directory_path() / ("chokeloops_mol_conn_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(dir / name, std::ios::binary) << text;
-    return (dir / name).string();
-  };
+  const fs::path dir = test::temp_dir("mol_conn");
+  auto write = [&](const std::string& name, const std::string& text) { return test::write_file(dir, name, text); };
   const std::string atom = "ATOM      1  CA  ALA A   1      11.104   6.134  -6.504  1.00  0.00           C\n";
   std::ifstream r(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/pdb/regression-13d3455ba14d", std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(r)), std::istreambuf_iterator<char>());

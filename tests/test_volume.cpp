@@ -23,6 +23,7 @@
 
 #include "chokeloops/analyze_volume.h"
 #include "chokeloops/io/volume_io.h"
+#include "temp_dir.h"
 #include "volume_images.h"
 
 using namespace chokeloops;
@@ -32,11 +33,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("chokeloops_volume_" + name + "_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path temp_dir(const std::string& name) { return test::temp_dir("volume_" + name); }
 
 VolumeAnalysis analyze_file(const std::string& path, VolumeFieldOptions f, AnalyzeOptions o = {}) {
   VolumeImage img = read_volume(path);

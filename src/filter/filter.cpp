@@ -8,11 +8,12 @@
 // nearer than the old one; every other value stays bit-identical.
 //
 // Why rounds and a check. Persistence decides what an edit did: after a batch, the genus must have
-// dropped by the batch's size with the components and sealed cavities unchanged. A batch that fails is
-// split in halves and each half checked again, so one edit that does something else (a membrane on a
-// flat core, two edits that touch) is undone and noted while the others stay. Pairs selected but left
-// (e.g. their membrane did not close) are asked again in the next round, from the edited field, with
-// the other membrane shape (a plane on odd rounds, the flood's sheet on even ones).
+// dropped with the components and sealed cavities unchanged. Edits of a failed batch that split a
+// component or sealed a cavity are found by one labelling and undone; otherwise the batch is split in
+// halves and each half checked again, so one edit that does something else (a membrane on a flat core,
+// two edits that touch) is undone and noted while the others stay. Pairs selected but left (e.g. their
+// membrane did not close) are asked again in the next round, from the edited field, with the other
+// membrane shape first (the flood's sheet on odd rounds, a plane on even ones).
 #include "chokeloops/filter/filter.h"
 
 #include <tbb/parallel_for.h>
@@ -130,13 +131,12 @@ Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
       for (int j = 0; j < sub.dims[1]; ++j)
         for (int i = 0; i < sub.dims[0]; ++i)
           sub.values[std::size_t(sub.index(i, j, k))] = grid.values[std::size_t(grid.index(lo[0] + i, lo[1] + j, lo[2] + k))];
-    ScalarGrid exact = sub;
-    redistance_from_signs(exact);
+    redistance_from_signs(sub);
     for (int k = 0; k < sub.dims[2]; ++k)
       for (int j = 0; j < sub.dims[1]; ++j)
         for (int i = 0; i < sub.dims[0]; ++i) {
           const Id v = grid.index(lo[0] + i, lo[1] + j, lo[2] + k);
-          const float now = grid.values[std::size_t(v)], near = std::abs(exact.values[std::size_t(sub.index(i, j, k))]);
+          const float now = grid.values[std::size_t(v)], near = std::abs(sub.values[std::size_t(sub.index(i, j, k))]);
           const bool inside = now <= 0;
           const float magnitude = std::max(flipped.count(v) ? near : std::min(std::abs(now), near), kSmallest);
           const float value = inside ? -magnitude : magnitude;
@@ -156,6 +156,14 @@ void restore(ScalarGrid& grid, const Undo& undo) {
 bool as_expected(const FilterSummary& got, const FilterSummary& before, int floor) {
   return got.components == before.components && got.cavities == before.cavities && got.genus < before.genus &&
          got.genus >= std::max(floor, 0);
+}
+
+// "cutting the handle of depth D at (x, y, z)": how the notes name an edit.
+std::string describe(const FilterEdit& e) {
+  std::ostringstream s;
+  s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at (" << e.point[0]
+    << ", " << e.point[1] << ", " << e.point[2] << ")";
+  return s.str();
 }
 
 bool close_to(const std::array<double, 3>& a, const std::array<double, 3>& b, double h) {
@@ -243,12 +251,8 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       }
       const FilterEdit& e = edits[i];
       failed.push_back({e.side, e.point});
-      std::ostringstream s;
-      s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at (" << e.point[0]
-        << ", " << e.point[1] << ", " << e.point[2] << ") "
-        << (e.side == Side::Handle ? "split a component (with the other edits of its round)" : "sealed a cavity (with the other edits of its round)")
-        << ": undone";
-      notes.push_back(s.str());
+      notes.push_back(describe(e) + (e.side == Side::Handle ? " split a component" : " sealed a cavity") +
+                      " (with the other edits of its round): undone");
     }
     return apply_checked(grid, std::move(rest), now, floor, notes, failed);
   }
@@ -256,8 +260,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
     const FilterEdit& e = edits[0];
     failed.push_back({e.side, e.point});
     std::ostringstream s;
-    s << (e.side == Side::Handle ? "cutting the handle" : "filling the tunnel") << " of depth " << e.depth << " at ("
-      << e.point[0] << ", " << e.point[1] << ", " << e.point[2] << ") left genus " << got.genus << ", " << got.components
+    s << describe(e) << " left genus " << got.genus << ", " << got.components
       << " components, " << got.cavities << " cavities (expected a genus below " << current.genus << ", " << current.components << ", "
       << current.cavities << "): undone";
     notes.push_back(s.str());
@@ -324,7 +327,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     }
     report.rounds = round;
     const auto t_m = Clock::now();
-    // Odd rounds cut straight across (a plane), even rounds along the flood's contact sheet.
+    // Odd rounds try the flood's contact sheet first, even rounds a plane straight across.
     const MembraneShape shape = round % 2 == 1 ? MembraneShape::Sheet : MembraneShape::Plane;
     tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {
       Candidate& c = candidates[job / 2];

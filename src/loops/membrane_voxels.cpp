@@ -104,8 +104,7 @@ Sheet collect_sheet(const detail::FloodBox& box, const ScalarGrid& grid, std::ui
 // The piece through the saddle of the slab {0 <= (x - saddle).n < W} within the region, n along the line
 // between the seed pieces and W the largest step a Freudenthal edge makes along n: every path from one
 // side of the slab to the other steps on it.
-Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const Choke& c, const std::array<int, 3>& sc,
-                  std::vector<Id>& out) {
+Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const std::array<int, 3>& sc, std::vector<Id>& out) {
   std::array<double, 3> n;
   double len = 0;
   for (int a = 0; a < 3; ++a) n[a] = box.seed_centroid[1][a] - box.seed_centroid[0][a], len += n[a] * n[a];
@@ -135,7 +134,6 @@ Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const Cho
     for (std::uint32_t li : piece) out.push_back(box.global(li));
   }
   std::sort(out.begin(), out.end());
-  (void)c;
   return result;
 }
 
@@ -165,7 +163,7 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
       continue;
     }
     if (outcome == detail::FloodOutcome::Flooded && shape == MembraneShape::Plane) {
-      const Sheet s = plane_piece(box, grid, c, sc, out.shore);
+      const Sheet s = plane_piece(box, grid, sc, out.shore);
       if (s == Sheet::AtGridBorder) {
         out.note = "the cut plane reaches the side of the grid";
         out.shore.clear();

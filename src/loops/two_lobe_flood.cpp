@@ -43,7 +43,7 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
   // flood is memory-bound (perf: the reads of a newly met neighbour's zone and value were two cache
   // misses, two thirds of its time); one word makes it one, and spares a scattered read of the grid.
   constexpr std::uint32_t kZone = FloodBox::kZone, kOutside = FloodBox::kOutside, kBorder = FloodBox::kBorder;
-  constexpr int kLevelShift = 3;
+  constexpr int kLevelShift = FloodBox::kLevelShift;
   const double level = grid.voxel_size / 64;
   const double fs = f[s];
   // Flood levels (a bucket queue), quantised to 1/64 voxel; 0 for everything on the seeds' side of the saddle.

@@ -19,6 +19,7 @@ enum class FloodOutcome { Flooded, Grow, Shrink };  // Grow: a lobe is not in th
 // by its next flood: read what is needed before flooding again on the same thread.
 struct FloodBox {
   static constexpr std::uint32_t kZone = 3, kOutside = 3, kBorder = 4;
+  static constexpr int kLevelShift = 3;
   std::array<int, 3> lo{}, hi{}, n{};  // grid coordinates of the box (inclusive) and its size
   Id base = 0;                         // grid id of local (0, 0, 0)
   Id gy = 0, gz = 0;                   // grid strides
@@ -30,7 +31,7 @@ struct FloodBox {
   std::array<std::size_t, 2> seed_count{0, 0};
 
   std::uint32_t zone(std::uint32_t li) const { return (*cell)[li] & kZone; }
-  std::uint32_t level(std::uint32_t li) const { return (*cell)[li] >> 3; }  // 0: below the saddle
+  std::uint32_t level(std::uint32_t li) const { return (*cell)[li] >> kLevelShift; }  // 0: below the saddle
   bool on_border(std::uint32_t li) const { return (*cell)[li] & kBorder; }
   bool in_contact(std::uint32_t li) const { return (*contact)[li] != 0; }
   std::array<int, 3> local(std::uint32_t li) const {

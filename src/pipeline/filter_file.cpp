@@ -87,8 +87,8 @@ FilterFileResult filter_file(const std::string& input, const std::string& output
     res.kind = "volume";
     const VolumeImage image = read_volume(input, options.volume);
     const VolumeField field = volume_to_levelset(image, options.field);
+    const ScalarGrid& before = field.grid;
     ScalarGrid grid = field.grid;
-    const ScalarGrid before = grid;
     FreudenthalComplex cx(grid.dims);
     auto voxel_of = [&](Id v, std::array<int, 3>& q) {
       const auto p = cx.coords(v);
