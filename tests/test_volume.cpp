@@ -187,7 +187,7 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   EXPECT_LT(std::abs(nrm[0] * Rm[0][2] + nrm[1] * Rm[1][2] + nrm[2] * Rm[2][2]), 0.2);
   // Every written point inside the image's world box (back through the inverse affine).
   write_report(r, {}, (d / "out").string());
-  auto names = write_loop_volumes(a, in, (d / "out").string());
+  auto names = write_loop_volumes(a, in, (d / "out").string()).files;
   nlohmann::json j;
   std::ifstream((d / "out" / "loops.json")) >> j;
   EXPECT_EQ(j["coordinates"]["convention"], "RAS");
@@ -228,6 +228,48 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
         }
   ASSERT_GT(tunnel_voxels, 10);
   EXPECT_LT(dist({sx / tunnel_voxels, sy / tunnel_voxels, sz / tunnel_voxels}, centre_world), 1.5);
+  fs::remove_all(d);
+}
+
+// membranes.nii.gz means what it says: flipping one loop's membrane voxels in the mask removes that loop's
+// handle (cut) or tunnel (fill), and nothing else: genus 1 -> 0, one surface component, no cavity.
+TEST(VolumeWorld, MembraneVolumeCutsTheHandleAndFillsTheTunnel) {
+  fs::path d = temp_dir("membranes");
+  const std::array<double, 3> c{22, 24, 21};
+  auto img = make_image({64, 48, 29}, {0.7, 1.0, 1.5}, "uint8", [&](double x, double y, double z) { return torus(x, y, z, c, 12, 5); });
+  write_scalar_volume(img, (d / "torus.nii.gz").string());
+  VolumeImage in = read_volume((d / "torus.nii.gz").string());
+  VolumeAnalysis a = analyze_volume(in, label(1), {});
+  const AnalyzeResult& r = a.result;
+  ASSERT_EQ(r.surface_stats.genus, 1);
+  const Loop* hl = find_loop(r, Side::Handle, Kind::Generator);
+  const Loop* tl = find_loop(r, Side::Tunnel, Kind::Generator);
+  ASSERT_TRUE(hl && tl);
+  fs::create_directories(d / "out");
+  const LoopVolumes volumes = write_loop_volumes(a, in, (d / "out").string());
+  EXPECT_TRUE(volumes.warnings.empty());
+  const auto& names = volumes.files;
+  const VolumeImage mv = read_volume((d / "out" / names[1]).string());
+  ASSERT_EQ(mv.dims, in.dims);
+  for (const Loop* l : {hl, tl}) {
+    const int id = int(l - r.loops.data()) + 1;
+    const float inside = l == hl ? 1.f : 0.f;
+    VolumeImage edited = in;
+    int voxels = 0;
+    for (std::size_t v = 0; v < mv.values.size(); ++v)
+      if (mv.values[v] == id) {
+        EXPECT_EQ(in.values[v], inside) << "a membrane voxel on the wrong side at " << v;
+        edited.values[v] = 1.f - inside;
+        ++voxels;
+      }
+    // A disc across the tube (r 5 mm, at most ~2 voxels thick) or across the hole (r 7 mm, the same).
+    EXPECT_GT(voxels, 20);
+    EXPECT_LT(voxels, l == hl ? 400 : 700);
+    const AnalyzeResult after = analyze_volume(edited, label(1), {}).result;
+    EXPECT_EQ(after.surface_stats.genus, 0) << (l == hl ? "handle" : "tunnel");
+    EXPECT_EQ(after.surface_stats.components, 1);
+    EXPECT_EQ(after.chokes.handle_generators, 0);
+  }
   fs::remove_all(d);
 }
 

@@ -3,6 +3,7 @@
 // index of the labels.
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -69,11 +70,15 @@ VolumeAnalysis analyze_one(const VolumeImage& image, const VolumeFieldOptions& f
     extra["topology_defects"] = topology_defects(a.result, vo.expect_genus);
     a.result.extra_json = extra.dump();
   }
+  // The label volumes first, so that loops.json carries their warnings too.
+  std::error_code ec;
+  std::filesystem::create_directories(outdir, ec);
+  const LoopVolumes volumes = write_loop_volumes(a, image, outdir);
+  a.result.warnings.insert(a.result.warnings.end(), volumes.warnings.begin(), volumes.warnings.end());
   write_report(a.result, options, outdir);
-  std::vector<std::string> volumes = write_loop_volumes(a, image, outdir);
   if (vo.view) write_view_html(outdir);
   for (auto& w : a.result.warnings) std::cerr << "chokeloops analyze: warning: " << w << "\n";
-  summary = summarize(a, options, vo, outdir, volumes, false);
+  summary = summarize(a, options, vo, outdir, volumes.files, false);
   return a;
 }
 

@@ -28,9 +28,13 @@ std::vector<long long> image_labels(const VolumeImage& image);
 // topology defects (handles a segmentation should not have). Traced loops only.
 std::vector<int> topology_defects(const AnalyzeResult& r, int expected_genus);
 
-// loops.nii.gz / loops.nrrd (each loop's voxels carry its id + 1) and membranes.* (each loop's spanning
-// disc, a fan from its centroid, carries its id + 1) on the input's grid and header, into outdir.
-// Returns the file names written.
-std::vector<std::string> write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir);
+// loops.nii.gz / loops.nrrd (each loop's voxels carry its id + 1) and membranes.* (the voxels whose flip
+// removes the loop's handle or tunnel, loops/membrane_voxels.h, carry its id + 1) on the input's grid and
+// header, into outdir.
+struct LoopVolumes {
+  std::vector<std::string> files;          // names within outdir: loops, membranes
+  std::vector<std::string> warnings;       // traced loops whose membrane did not close, and why
+};
+LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir);
 
 }  // namespace chokeloops

@@ -335,22 +335,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       if (!(cut ? c.cut : c.fill)) return;
       MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
       const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
-      // A pair thinner than half a voxel (noise) is one voxel wide where it is narrowest: its saddle alone is
-      // tried first, before floods that would grow to the whole grid looking for a closed sheet.
-      const bool sub_voxel = g.depth < 0.5 * grid.voxel_size;
-      const MembraneShape other = shape == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
-      const std::array<MembraneShape, 3> order = sub_voxel ? std::array<MembraneShape, 3>{MembraneShape::Saddle, shape, other}
-                                                           : std::array<MembraneShape, 3>{shape, other, MembraneShape::Saddle};
-      for (MembraneShape s : order) {
-        if (s == MembraneShape::Saddle && !sub_voxel) break;
-        try {
-          m = membrane_voxels(grid, g, options.membrane, s);
-        } catch (const Error& e) {
-          m.found = false;
-          m.note = e.what();
-        }
-        if (m.found) break;
-      }
+      m = closing_membrane_voxels(grid, g, options.membrane, shape);
       if (m.found && options.can_change)
         for (Id v : m.shore)
           if (!options.can_change(v)) {

@@ -214,4 +214,23 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
   return out;
 }
 
+MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
+                                       MembraneShape first) {
+  const bool sub_voxel = choke.depth < 0.5 * grid.voxel_size;
+  const MembraneShape other = first == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
+  std::vector<MembraneShape> order{first, other};
+  if (sub_voxel) order.insert(order.begin(), MembraneShape::Saddle);
+  MembraneVoxels m;
+  for (MembraneShape s : order) {
+    try {
+      m = membrane_voxels(grid, choke, options, s);
+    } catch (const Error& e) {
+      m = MembraneVoxels{};
+      m.note = e.what();
+    }
+    if (m.found) break;
+  }
+  return m;
+}
+
 }  // namespace chokeloops

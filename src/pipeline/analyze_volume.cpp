@@ -8,6 +8,10 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include "chokeloops/loops/membrane_voxels.h"
+#include "chokeloops/topology/complex.h"
 
 namespace chokeloops {
 
@@ -75,50 +79,63 @@ std::vector<int> topology_defects(const AnalyzeResult& r, int expected_genus) {
   return std::vector<int>(gens.begin() + std::max(0, expected_genus), gens.end());
 }
 
-std::vector<std::string> write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir) {
+LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir) {
   const AnalyzeResult& r = a.result;
   const std::array<double, 3> h{r.grid.h(0), r.grid.h(1), r.grid.h(2)};
   const double step = 0.4 * std::min({h[0], h[1], h[2]});
   std::vector<std::int32_t> loops(std::size_t(image.voxel_count()), 0), membranes(loops.size(), 0);
+  auto voxel = [&](const int q[3]) {
+    return std::size_t(q[0]) + std::size_t(image.dims[0]) * (std::size_t(q[1]) + std::size_t(image.dims[1]) * q[2]);
+  };
   // Grid-frame position -> nearest image voxel (image voxel (0,0,0) is at the frame's 0).
-  auto mark = [&](std::vector<std::int32_t>& vol, const std::array<double, 3>& p, std::int32_t id) {
+  auto mark = [&](const std::array<double, 3>& p, std::int32_t id) {
     int q[3];
     for (int c = 0; c < 3; ++c) {
       q[c] = int(std::lround(p[c] / h[c]));
       if (q[c] < 0 || q[c] >= image.dims[c]) return;
     }
-    vol[std::size_t(q[0]) + std::size_t(image.dims[0]) * (std::size_t(q[1]) + std::size_t(image.dims[1]) * q[2])] = id;
-  };
-  auto lerp = [](const std::array<double, 3>& x, const std::array<double, 3>& y, double t) {
-    return std::array<double, 3>{x[0] + t * (y[0] - x[0]), x[1] + t * (y[1] - x[1]), x[2] + t * (y[2] - x[2])};
-  };
-  auto dist = [](const std::array<double, 3>& x, const std::array<double, 3>& y) {
-    return std::sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]));
+    loops[voxel(q)] = id;
   };
   for (int i = 0; i < int(r.loops.size()); ++i) {
     const Loop& l = r.loops[i];
     if (!l.found || l.points.size() < 3) continue;
-    const std::int32_t id = i + 1;
     const std::size_t n = l.points.size();
     for (std::size_t s = 0; s < n; ++s) {
       const auto &p = l.points[s], &q = l.points[(s + 1) % n];
-      const int m = std::max(1, int(std::ceil(dist(p, q) / step)));
-      for (int k = 0; k <= m; ++k) mark(loops, lerp(p, q, double(k) / m), id);
-      // The disc: the triangle (centroid, p, q), sampled along lines from the centroid.
-      const double reach = std::max(dist(l.centroid, p), dist(l.centroid, q));
-      const int rings = std::max(1, int(std::ceil(reach / step)));
-      for (int u = 0; u <= rings; ++u) {
-        const double t = double(u) / rings;
-        const auto a0 = lerp(l.centroid, p, t), a1 = lerp(l.centroid, q, t);
-        const int mm = std::max(1, int(std::ceil(dist(a0, a1) / step)));
-        for (int k = 0; k <= mm; ++k) mark(membranes, lerp(a0, a1, double(k) / mm), id);
+      const double len = std::sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]));
+      const int m = std::max(1, int(std::ceil(len / step)));
+      for (int k = 0; k <= m; ++k) {
+        const double t = double(k) / m;
+        mark({p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), p[2] + t * (q[2] - p[2])}, i + 1);
       }
     }
   }
-  std::vector<std::string> names = {label_volume_name(image, "loops"), label_volume_name(image, "membranes")};
-  write_label_volume(image, loops, outdir + "/" + names[0]);
-  write_label_volume(image, membranes, outdir + "/" + names[1]);
-  return names;
+  // The membranes: the voxels whose flip removes the loop's handle (cut, in the solid) or tunnel (fill, in the
+  // outside), as `chokeloops filter` would edit them. Each loop's own membrane, independent of the others.
+  std::vector<MembraneVoxels> shores(r.loops.size());
+  tbb::parallel_for(std::size_t(0), r.loops.size(), [&](std::size_t i) {
+    if (r.loops[i].found) shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke);
+  });
+  const FreudenthalComplex cx(r.grid.dims);
+  LoopVolumes out;
+  for (std::size_t i = 0; i < shores.size(); ++i) {
+    if (r.loops[i].found && !shores[i].found)
+      out.warnings.push_back("loop " + std::to_string(i) + " has no membrane voxels: " + shores[i].note);
+    for (Id v : shores[i].shore) {
+      const auto p = cx.coords(v);
+      int q[3];
+      bool inside = true;
+      for (int c = 0; c < 3; ++c) {
+        q[c] = p[c] - a.pad[c];
+        inside = inside && q[c] >= 0 && q[c] < image.dims[c];
+      }
+      if (inside) membranes[voxel(q)] = std::int32_t(i + 1);
+    }
+  }
+  out.files = {label_volume_name(image, "loops"), label_volume_name(image, "membranes")};
+  write_label_volume(image, loops, outdir + "/" + out.files[0]);
+  write_label_volume(image, membranes, outdir + "/" + out.files[1]);
+  return out;
 }
 
 }  // namespace chokeloops
