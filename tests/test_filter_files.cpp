@@ -123,5 +123,8 @@ TEST(FilterFiles, ImpossibleRequestsAreOneLineErrorsWithExitCode2) {
   EXPECT_EQ(cli("'" + (d / "missing.vdb").string() + "' -o '" + (d / "o.vdb").string() + "' --keep-genus 0", err, d), 2);
   EXPECT_EQ(cli("'" + mesh + "' -o '" + (d / "g.ply").string() + "' --mode sideways --keep-genus 0", err, d), 2);
   one_line("--mode");
+  // a volume is filtered on its own voxels: resampling it is refused
+  EXPECT_EQ(cli("'" + (d / "any.nii.gz").string() + "' -o '" + (d / "o.nii.gz").string() + "' --label 1 --voxel-size 0.5 --keep-genus 0", err, d), 2);
+  one_line("own voxels");
   fs::remove_all(d);
 }

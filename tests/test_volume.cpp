@@ -62,6 +62,32 @@ float torus(double x, double y, double z, std::array<double, 3> c, double R, dou
   return std::hypot(q, z - c[2]) <= r ? 1.f : 0.f;
 }
 
+// A torus mask (R 12, r 5 mm, axis along the image's k) on a 64x48x29 lattice of spacing 0.7 x 1 x 1.5 mm,
+// rotated by 30 degrees about (1,2,3)/|.| and offset in world: direction * spacing as the sform.
+struct ObliqueTorus {
+  VolumeImage image;
+  std::array<std::array<double, 3>, 3> rotation;
+  std::array<double, 3> centre_world;
+};
+
+ObliqueTorus oblique_torus() {
+  const std::array<double, 3> h{0.7, 1.0, 1.5}, c{22, 24, 21};
+  ObliqueTorus ot;
+  ot.image = make_image({64, 48, 29}, h, "uint8", [&](double x, double y, double z) { return torus(x, y, z, c, 12, 5); });
+  const double ang = M_PI / 6, n0 = 1 / std::sqrt(14.0), n1 = 2 / std::sqrt(14.0), n2 = 3 / std::sqrt(14.0);
+  const double cs = std::cos(ang), sn = std::sin(ang), t = 1 - cs;
+  ot.rotation = {{{cs + n0 * n0 * t, n0 * n1 * t - n2 * sn, n0 * n2 * t + n1 * sn},
+                  {n1 * n0 * t + n2 * sn, cs + n1 * n1 * t, n1 * n2 * t - n0 * sn},
+                  {n2 * n0 * t - n1 * sn, n2 * n1 * t + n0 * sn, cs + n2 * n2 * t}}};
+  const double off[3] = {-50, 20, 10};
+  for (int r = 0; r < 3; ++r) {
+    for (int a = 0; a < 3; ++a) ot.image.affine[r][a] = ot.rotation[r][a] * h[a];
+    ot.image.affine[r][3] = off[r];
+    ot.centre_world[r] = ot.rotation[r][0] * c[0] + ot.rotation[r][1] * c[1] + ot.rotation[r][2] * c[2] + off[r];
+  }
+  return ot;
+}
+
 }  // namespace
 
 TEST(VolumeMasks, VoxelisedTorus) {
@@ -149,20 +175,12 @@ TEST(VolumeMasks, DiagonalContactsFollowTheFreudenthalDiagonal) {
 
 TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   fs::path d = temp_dir("oblique");
-  const std::array<double, 3> h{0.7, 1.0, 1.5}, c{22, 24, 21};
+  const std::array<double, 3> h{0.7, 1.0, 1.5};
   const double R = 12, rr = 5;
-  auto img = make_image({64, 48, 29}, h, "uint8", [&](double x, double y, double z) { return torus(x, y, z, c, R, rr); });
-  // Rotation by 30 degrees about (1,2,3)/|.|, then an offset: direction * spacing as the sform.
-  const double ang = M_PI / 6, n0 = 1 / std::sqrt(14.0), n1 = 2 / std::sqrt(14.0), n2 = 3 / std::sqrt(14.0);
-  const double cs = std::cos(ang), sn = std::sin(ang), t = 1 - cs;
-  const double Rm[3][3] = {{cs + n0 * n0 * t, n0 * n1 * t - n2 * sn, n0 * n2 * t + n1 * sn},
-                           {n1 * n0 * t + n2 * sn, cs + n1 * n1 * t, n1 * n2 * t - n0 * sn},
-                           {n2 * n0 * t - n1 * sn, n2 * n1 * t + n0 * sn, cs + n2 * n2 * t}};
-  const double off[3] = {-50, 20, 10};
-  for (int r = 0; r < 3; ++r) {
-    for (int a = 0; a < 3; ++a) img.affine[r][a] = Rm[r][a] * h[a];
-    img.affine[r][3] = off[r];
-  }
+  const ObliqueTorus ot = oblique_torus();
+  const auto& Rm = ot.rotation;
+  const auto& centre_world = ot.centre_world;
+  auto img = ot.image;
   write_scalar_volume(img, (d / "oblique.nii.gz").string());
   VolumeImage in = read_volume((d / "oblique.nii.gz").string());
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(in.spacing[a], h[a], 1e-5);
@@ -177,8 +195,6 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
   EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
   // World positions: the tunnel loop circles the torus centre, the handle loop lies on the centre circle.
-  std::array<double, 3> centre_world;
-  for (int q = 0; q < 3; ++q) centre_world[q] = Rm[q][0] * c[0] + Rm[q][1] * c[1] + Rm[q][2] * c[2] + off[q];
   const auto tc = r.frame.apply(tl->centroid), hc = r.frame.apply(hl->centroid);
   EXPECT_LT(dist(tc, centre_world), 1.0);
   EXPECT_NEAR(dist(hc, centre_world), R, 1.5);
@@ -228,6 +244,64 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
         }
   ASSERT_GT(tunnel_voxels, 10);
   EXPECT_LT(dist({sx / tunnel_voxels, sy / tunnel_voxels, sz / tunnel_voxels}, centre_world), 1.5);
+  fs::remove_all(d);
+}
+
+// --voxel-size resamples onto an isotropic lattice along the image's axes: the loops stay where the
+// anisotropic analysis puts them in world mm, the label volumes stay on the input's own grid, and a mask's
+// boundary still runs halfway between its voxels (the inside volume is kept).
+TEST(VolumeWorld, ResampledToIsotropicVoxelsKeepsWorldPositions) {
+  fs::path d = temp_dir("resampled");
+  const ObliqueTorus ot = oblique_torus();
+  const double R = 12, rr = 5;
+  VolumeFieldOptions f = label(1);
+  f.voxel_size = 0.5;
+  VolumeAnalysis a = analyze_volume(ot.image, f, {});
+  const AnalyzeResult& r = a.result;
+  for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r.grid.h(c), 0.5);
+  EXPECT_EQ(r.surface_stats.genus, 1);
+  EXPECT_EQ(r.chokes.handle_generators, 1);
+  const Loop* hl = find_loop(r, Side::Handle, Kind::Generator);
+  const Loop* tl = find_loop(r, Side::Tunnel, Kind::Generator);
+  ASSERT_TRUE(hl && tl);
+  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
+  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
+  EXPECT_LT(dist(r.frame.apply(tl->centroid), ot.centre_world), 1.0);
+  EXPECT_NEAR(dist(r.frame.apply(hl->centroid), ot.centre_world), R, 1.5);
+  // The inside volume: the resampled mask's voxels (0.125 mm^3) against the input's (1.05 mm^3).
+  const VolumeAnalysis native = analyze_volume(ot.image, label(1), {});
+  const double v_native = 0.7 * 1.0 * 1.5;
+  std::size_t in_native = 0, in_resampled = 0;
+  for (float x : native.result.grid.values) in_native += x < 0;
+  for (float x : r.grid.values) in_resampled += x < 0;
+  EXPECT_NEAR(0.125 * double(in_resampled), v_native * double(in_native), 0.05 * v_native * double(in_native));
+  fs::create_directories(d);
+  const LoopVolumes volumes = write_loop_volumes(a, ot.image, d.string());
+  EXPECT_TRUE(volumes.warnings.empty());
+  // The loop volume is on the input's grid; the tunnel loop's voxels circle the torus centre.
+  const VolumeImage lv = read_volume((d / volumes.files[0]).string());
+  EXPECT_EQ(lv.dims, ot.image.dims);
+  const int tid = int(tl - r.loops.data()) + 1;
+  double sum[3] = {0, 0, 0};
+  int n = 0;
+  for (int k = 0; k < lv.dims[2]; ++k)
+    for (int j = 0; j < lv.dims[1]; ++j)
+      for (int i = 0; i < lv.dims[0]; ++i)
+        if (lv.values[std::size_t(i) + std::size_t(lv.dims[0]) * (j + std::size_t(lv.dims[1]) * k)] == tid) {
+          const auto w = ot.image.to_world(i, j, k);
+          for (int c = 0; c < 3; ++c) sum[c] += w[c];
+          ++n;
+        }
+  ASSERT_GT(n, 10);
+  EXPECT_LT(dist({sum[0] / n, sum[1] / n, sum[2] / n}, ot.centre_world), 1.5);
+  // Too fine a lattice for the memory budget is refused before allocating.
+  f.voxel_size = 1e-4;
+  try {
+    analyze_volume(ot.image, f, {});
+    ADD_FAILURE() << "a 1e-4 mm lattice was not refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 3) << e.what();
+  }
   fs::remove_all(d);
 }
 
@@ -348,14 +422,26 @@ TEST(VolumeBadInput, OneLineErrorsWithExitCode2) {
   // no such file
   expect_bad([&] { read_volume((d / "missing.nii.gz").string()); }, "no such file");
   // the CLI: exit code 2 and one line on stderr
-  const std::string err = (d / "err.txt").string();
-  int status = std::system((std::string("'") + CHOKELOOPS_CLI + "' analyze '" + (d / "t.nii.gz").string() + "' --label 1 -o '" +
-                            (d / "o").string() + "' --quiet 2>'" + err + "' >/dev/null")
-                               .c_str());
-  EXPECT_EQ(WEXITSTATUS(status), 2);
-  std::ifstream e(err);
-  std::string all((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+  auto cli = [&](const std::string& input, const std::string& args, std::string& stderr_text) {
+    const std::string err = (d / "err.txt").string();
+    const int status = std::system((std::string("'") + CHOKELOOPS_CLI + "' analyze '" + (d / input).string() + "' " + args +
+                                    " -o '" + (d / "o").string() + "' --quiet 2>'" + err + "' >/dev/null")
+                                       .c_str());
+    std::ifstream e(err);
+    stderr_text.assign(std::istreambuf_iterator<char>(e), std::istreambuf_iterator<char>());
+    return WEXITSTATUS(status);
+  };
+  std::string all;
+  EXPECT_EQ(cli("t.nii.gz", "--label 1", all), 2);
   EXPECT_EQ(std::count(all.begin(), all.end(), '\n'), 1) << all;
+  // a volume keeps its own lattice unless --voxel-size resamples it: --resolution is refused
+  EXPECT_EQ(cli("ok.nii", "--label 1 --resolution 64", all), 2);
+  EXPECT_EQ(std::count(all.begin(), all.end(), '\n'), 1) << all;
+  EXPECT_NE(all.find("--voxel-size"), std::string::npos) << all;
+  EXPECT_EQ(cli("ok.nii", "--label 1 --voxel-size 0.5", all), 0) << all;
+  nlohmann::json j;
+  std::ifstream(d / "o" / "loops.json") >> j;
+  EXPECT_EQ(j["volume"]["resampled_to_mm"], 0.5);
   fs::remove_all(d);
 }
 

@@ -16,6 +16,7 @@ inline VolumeImage make_image(std::array<int, 3> dims, std::array<double, 3> spa
   v.dims = dims;
   v.datatype = datatype;
   v.convention = "RAS";
+  v.spacing = spacing;
   for (int r = 0; r < 3; ++r) v.affine[r][r] = spacing[r];
   v.values.resize(std::size_t(v.voxel_count()));
   for (int k = 0; k < dims[2]; ++k)

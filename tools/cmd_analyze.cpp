@@ -62,6 +62,8 @@ the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD)
   --labels all              one analysis per non-zero label into OUTDIR/label_N/, index in OUTDIR/labels.json
   --volume K                the K-th volume (from 0) of a 4D image
   --expect-genus G          list handle generators beyond the G most persistent as topology defects
+  --voxel-size MM           resample onto an isotropic lattice of MM along the image's axes (trilinear;
+                            default: the image's own spacing, anisotropic allowed)
 Exit codes: 0 success, 2 bad input, 3 out of resources, 4 internal error (a bug: please report it).
 )";
 
@@ -241,8 +243,9 @@ int run(std::vector<std::string> args) {
       throw Error("--labels all analyses every label: give it without --label / --iso");
     if (!vo.all_labels && vo.field.has_label == vo.field.has_iso)
       throw Error("a volume needs exactly one of --iso T (scalar image), --label N or --labels all (label map)");
-    if (options.levelset.voxel_size > 0 || options.resolution_auto)
-      throw Error("--voxel-size / --resolution auto: volumes are analysed on their own voxel grid (no resampling)");
+    if (!grid_flags.empty() || options.resolution_auto)
+      throw Error("--resolution: a volume is analysed on its own voxel grid; --voxel-size MM resamples it");
+    vo.field.voxel_size = options.levelset.voxel_size;
     if (!max_loops_given) options.max_loops = 20;
     vo.field.margin = options.levelset.margin;
     vo.view = view;

@@ -37,7 +37,7 @@ int run(std::vector<std::string> args) {
   FilterFileOptions o;
   std::string input, output, report;
   int threads = 0;
-  bool quiet = false;
+  bool quiet = false, grid_given = false;
   while (in.next()) {
     if (in.is("-h", "--help")) {
       std::fputs(kUsage, stdout);
@@ -53,8 +53,9 @@ int run(std::vector<std::string> args) {
       else if (m == "fill") o.filter.mode = FilterMode::Fill;
       else throw Error("--mode must be auto, cut or fill (" + in.see_help() + ")");
     } else if (in.is("--report")) report = in.value();
-    else if (in.is("--resolution")) o.levelset.resolution = int(in.integer(8, 4096));
+    else if (in.is("--resolution")) o.levelset.resolution = int(in.integer(8, 4096)), grid_given = true;
     else if (in.is("--voxel-size")) {
+      grid_given = true;
       o.levelset.voxel_size = in.number();
       if (!(o.levelset.voxel_size > 0)) throw Error("--voxel-size must be positive");
     } else if (in.is("--margin")) o.levelset.margin = o.field.margin = in.number();
@@ -75,6 +76,8 @@ int run(std::vector<std::string> args) {
   if (output.empty()) throw Error("no output given (-o OUTPUT)");
   if (is_volume_path(input) && o.field.has_iso == o.field.has_label)
     throw Error("a volume needs exactly one of --iso T or --label N (" + in.see_help() + ")");
+  if (is_volume_path(input) && grid_given)
+    throw Error("--resolution / --voxel-size: a volume is filtered on its own voxels (the output keeps its grid)");
   auto limit = cli::limit_threads(threads);
   const FilterFileResult r = filter_file(input, output, o);
   if (!report.empty()) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -27,6 +28,74 @@ std::array<double, 3> WorldFrame::rotate(const std::array<double, 3>& v) const {
   return x;
 }
 
+namespace {
+
+// The image's inside function (>= 0 inside) resampled trilinearly onto an isotropic lattice of spacing H
+// along the image's axes; the result is a scalar image read at iso 0.
+VolumeImage resample_inside_function(const VolumeImage& image, const std::function<float(float)>& g_of, double H,
+                                     double margin_mm) {
+  const std::array<double, 3>& h = image.spacing;
+  VolumeImage out;
+  out.path = image.path;
+  out.format = image.format;
+  out.datatype = "float32";
+  out.convention = image.convention;
+  out.transform_source = image.transform_source + ", resampled";
+  out.warnings = image.warnings;
+  double longest = 0;
+  for (int a = 0; a < 3; ++a) longest = std::max(longest, h[a] * (image.dims[a] - 1));
+  const double margin = margin_mm >= 0 ? margin_mm : default_margin(longest, H);
+  std::int64_t padded = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double extent = h[a] * (image.dims[a] - 1);
+    const double n = std::floor(extent / H + 1e-9) + 1;
+    if (n > double(1 << 20)) throw Error(image.path + ": --voxel-size " + std::to_string(H) + " mm is far too small for the image", 3);
+    out.dims[a] = int(n);
+    if (out.dims[a] < 2)
+      throw Error(image.path + ": --voxel-size " + std::to_string(H) + " mm leaves fewer than 2 voxels along axis " +
+                  std::to_string(a) + " (" + std::to_string(extent) + " mm)");
+    padded *= out.dims[a] + 2 * std::max<std::int64_t>(1, std::int64_t(std::ceil(margin / H)));
+    out.spacing[a] = H;
+    for (int r = 0; r < 3; ++r) out.affine[r][a] = image.affine[r][a] / h[a] * H;
+  }
+  for (int r = 0; r < 3; ++r) out.affine[r][3] = image.affine[r][3];
+  if (estimate_levelset_bytes(std::size_t(padded)) > default_max_memory())
+    throw Error(image.path + ": resampled to " + std::to_string(H) + " mm the grid needs more memory than the budget (" +
+                    std::to_string(default_max_memory() >> 20) + " MB); use a larger --voxel-size",
+                3);
+  const int nx = image.dims[0], ny = image.dims[1], nz = image.dims[2];
+  auto g_at = [&](int i, int j, int k) {
+    return g_of(image.values[std::size_t(i) + std::size_t(nx) * (std::size_t(j) + std::size_t(ny) * k)]);
+  };
+  out.values.resize(std::size_t(out.voxel_count()));
+  tbb::parallel_for(0, out.dims[2], [&](int k) {
+    auto cell = [&](int idx, int a, int& lo, double& t) {
+      const double u = std::min(idx * H / h[a], double(image.dims[a] - 1));
+      lo = std::min(int(u), image.dims[a] - 2);
+      t = u - lo;
+    };
+    int k0, j0, i0;
+    double tk, tj, ti;
+    cell(k, 2, k0, tk);
+    for (int j = 0; j < out.dims[1]; ++j) {
+      cell(j, 1, j0, tj);
+      for (int i = 0; i < out.dims[0]; ++i) {
+        cell(i, 0, i0, ti);
+        double v = 0;
+        for (int c = 0; c < 8; ++c) {
+          const int di = c & 1, dj = (c >> 1) & 1, dk = c >> 2;
+          const double w = (di ? ti : 1 - ti) * (dj ? tj : 1 - tj) * (dk ? tk : 1 - tk);
+          if (w != 0) v += w * g_at(i0 + di, j0 + dj, k0 + dk);
+        }
+        out.values[std::size_t(i) + std::size_t(out.dims[0]) * (std::size_t(j) + std::size_t(out.dims[1]) * k)] = float(v);
+      }
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
 VolumeField volume_to_levelset(const VolumeImage& image, const VolumeFieldOptions& o) {
   const std::string& path = image.path;
   if (o.has_iso == o.has_label)
@@ -49,6 +118,19 @@ VolumeField volume_to_levelset(const VolumeImage& image, const VolumeFieldOption
     if (o.has_label) return value == float(o.label);
     return o.inside_below ? value < iso : value >= iso;
   };
+  auto refuse_empty = [&] {
+    if (o.has_label) throw Error(path + ": label " + std::to_string(o.label) + " has no voxel (empty label)");
+    throw Error(path + ": no voxel is inside (" + (o.inside_below ? "below " : "at or above ") + "--iso " +
+                std::to_string(o.iso) + "); the image's values do not reach it");
+  };
+  if (o.voxel_size > 0) {
+    if (!std::isfinite(o.voxel_size)) throw Error("--voxel-size must be a finite number of mm");
+    if (std::none_of(image.values.begin(), image.values.end(), inside_of)) refuse_empty();
+    VolumeFieldOptions at_zero;
+    at_zero.has_iso = true;
+    at_zero.margin = o.margin;
+    return volume_to_levelset(resample_inside_function(image, g_of, o.voxel_size, o.margin), at_zero);
+  }
 
   VolumeField out;
   ScalarGrid& grid = out.grid;
@@ -85,11 +167,7 @@ VolumeField volume_to_levelset(const VolumeImage& image, const VolumeFieldOption
         }
       }
   out.inside_voxels = inside;
-  if (inside == 0) {
-    if (o.has_label) throw Error(path + ": label " + std::to_string(o.label) + " has no voxel (empty label)");
-    throw Error(path + ": no voxel is inside (" + (o.inside_below ? "below " : "at or above ") + "--iso " +
-                std::to_string(o.iso) + "); the image's values do not reach it");
-  }
+  if (inside == 0) refuse_empty();
 
   // Boundary sites: every vertex with an axis neighbour of the other sign gets the nearest crossing point.
   auto g_at = [&](int i, int j, int k) -> float {  // grid coordinates; padding is far outside

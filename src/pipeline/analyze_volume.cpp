@@ -49,6 +49,7 @@ VolumeAnalysis analyze_volume(const VolumeImage& image, const VolumeFieldOptions
                       {"mask", a.what},
                       {"inside_voxels", vf.inside_voxels},
                       {"padding_voxels", {vf.pad[0], vf.pad[1], vf.pad[2]}}};
+  if (field.voxel_size > 0) v["resampled_to_mm"] = field.voxel_size;
   nlohmann::json affine = nlohmann::json::array();
   for (auto& row : image.affine) affine.push_back({row[0], row[1], row[2], row[3]});
   v["index_to_world"] = affine;
@@ -81,8 +82,10 @@ std::vector<int> topology_defects(const AnalyzeResult& r, int expected_genus) {
 
 LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir) {
   const AnalyzeResult& r = a.result;
-  const std::array<double, 3> h{r.grid.h(0), r.grid.h(1), r.grid.h(2)};
-  const double step = 0.4 * std::min({h[0], h[1], h[2]});
+  // Positions are in the grid frame (mm along the image's axes, image voxel (0,0,0) at 0), whether or not the
+  // grid was resampled from the image.
+  const std::array<double, 3>& h = image.spacing;
+  const double step = 0.4 * std::min({h[0], h[1], h[2], r.grid.h(0), r.grid.h(1), r.grid.h(2)});
   std::vector<std::int32_t> loops(std::size_t(image.voxel_count()), 0), membranes(loops.size(), 0);
   auto voxel = [&](const int q[3]) {
     return std::size_t(q[0]) + std::size_t(image.dims[0]) * (std::size_t(q[1]) + std::size_t(image.dims[1]) * q[2]);
@@ -126,7 +129,7 @@ LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image
       int q[3];
       bool inside = true;
       for (int c = 0; c < 3; ++c) {
-        q[c] = p[c] - a.pad[c];
+        q[c] = int(std::lround((r.grid.origin[c] + p[c] * r.grid.h(c)) / h[c]));
         inside = inside && q[c] >= 0 && q[c] < image.dims[c];
       }
       if (inside) membranes[voxel(q)] = std::int32_t(i + 1);

@@ -85,6 +85,8 @@ FilterFileResult filter_file(const std::string& input, const std::string& output
     throw Error("cannot create the directory of " + output + ": " + ec.message(), 3);
   if (is_volume_path(input)) {
     res.kind = "volume";
+    if (options.field.voxel_size > 0)
+      throw Error(input + ": a volume is filtered on its own voxels; resampling (voxel_size) would change every one");
     const VolumeImage image = read_volume(input, options.volume);
     const VolumeField field = volume_to_levelset(image, options.field);
     const ScalarGrid& before = field.grid;

@@ -1,7 +1,8 @@
 #pragma once
 // Stage `levelset` for volumes (DESIGN §6 "Volumes"): a scalar image thresholded at an iso value, or one
 // label of a label map, becomes a signed distance (negative inside) in millimetres on the image's own
-// voxel lattice (anisotropic spacing kept, no resampling), padded by a margin of outside voxels.
+// voxel lattice (anisotropic spacing kept, no resampling unless voxel_size asks), padded by a margin of
+// outside voxels.
 //
 // The boundary: inside is {value >= iso} ({value < iso} with inside_below); a label map's label N is the
 // mask {value == N} taken at iso 1/2, so its boundary lies halfway between an inside and an outside voxel.
@@ -29,6 +30,7 @@ struct VolumeFieldOptions {
   bool has_label = false;
   double label = 0;               // label map: the label whose voxels are inside
   double margin = -1;             // mm of outside padding; < 0: max(10% of the longest side, 4 voxels)
+  double voxel_size = 0;          // > 0: resample to this isotropic spacing (mm) first, along the image's axes
 };
 
 // The grid's axis-aligned frame (vertex (i,j,k) at origin + spacing*(i,j,k), image voxel (0,0,0) at 0)
@@ -51,8 +53,12 @@ struct VolumeField {
   std::size_t boundary_sites = 0;
 };
 
+// With voxel_size > 0 the image is first resampled onto an isotropic lattice along its own axes (voxel
+// (0,0,0) kept in place): the function that is >= 0 inside (value - iso, or +-1/2 for a label's mask) is
+// interpolated trilinearly and read at 0 as above, so a mask's boundary still runs halfway between its voxels.
 // Throws Error(2) when neither or both of iso/label are given, the label is absent or the mask is empty
-// or fills the whole image (no boundary), or the iso value is not finite.
+// or fills the whole image (no boundary), or the iso value is not finite; Error(3) when the grid would not
+// fit in memory.
 VolumeField volume_to_levelset(const VolumeImage& image, const VolumeFieldOptions& options);
 
 }  // namespace chokeloops
