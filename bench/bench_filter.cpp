@@ -5,6 +5,8 @@
 //             the file path (read, field, filter, write, read back and check)
 // usage: bench_filter [--runs R] [case...]   (default: noisy:256 gm; medians of R runs, default 3)
 // The figure that does not depend on the machine's speed: filter time / persistence time of the same run.
+// Columns: persist = the first persistence; edits = applying edits and checking them, of which labels (the
+// components of both sides after each batch) and recheck (one persistence after each round's kept batch).
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -26,10 +28,23 @@ using namespace chokeloops;
 namespace {
 
 struct Figures {
-  double persistence_ms = 0, membranes_ms = 0, edits_ms = 0, total_ms = 0, peak_mb = 0, changed_pct = 0;
-  int genus_before = 0, genus_after = 0, components_before = 0, components_after = 0, edits = 0, notes = 0;
+  double persistence_ms = 0, membranes_ms = 0, edits_ms = 0, labels_ms = 0, rechecks_ms = 0, total_ms = 0, peak_mb = 0,
+         changed_pct = 0;
+  int genus_before = 0, genus_after = 0, components_before = 0, components_after = 0, edits = 0, notes = 0, rounds = 0;
   bool ok = false;
 };
+
+void take_report(const FilterReport& r, Figures& f) {
+  f.persistence_ms = r.timings_ms.at("persistence");
+  f.membranes_ms = r.timings_ms.at("membranes");
+  f.edits_ms = r.timings_ms.at("edits and checks");
+  f.labels_ms = r.timings_ms.at("labels");
+  f.rechecks_ms = r.timings_ms.at("persistence after edits");
+  f.total_ms = r.timings_ms.at("total");
+  f.genus_before = r.before.genus, f.genus_after = r.after.genus;
+  f.components_before = r.before.components, f.components_after = r.after.components;
+  f.edits = int(r.edits.size()), f.notes = int(r.notes.size()), f.rounds = r.rounds;
+}
 
 Figures run_case(const std::string& name) {
   Figures f;
@@ -40,13 +55,7 @@ Figures run_case(const std::string& name) {
     FilterOptions o;
     o.keep_genus = 5;
     const FilterReport r = filter_grid(g, o);
-    f.persistence_ms = r.timings_ms.at("persistence");
-    f.membranes_ms = r.timings_ms.at("membranes");
-    f.edits_ms = r.timings_ms.at("edits and checks");
-    f.total_ms = r.timings_ms.at("total");
-    f.genus_before = r.before.genus, f.genus_after = r.after.genus;
-    f.components_before = r.before.components, f.components_after = r.after.components;
-    f.edits = int(r.edits.size()), f.notes = int(r.notes.size());
+    take_report(r, f);
     f.changed_pct = 100.0 * double(r.voxels_changed) / double(g.values.size());
   } else if (name == "gm") {
     const std::string in = std::string(CHOKELOOPS_SOURCE_DIR) + "/data/volumes/mni_icbm152_gm_tal_nlin_sym_09a_converted.nii.gz";
@@ -58,13 +67,8 @@ Figures run_case(const std::string& name) {
     const auto t0 = std::chrono::steady_clock::now();
     const FilterFileResult r = filter_file(in, out, o);
     std::filesystem::remove(out);
-    f.persistence_ms = r.report.timings_ms.at("persistence");
-    f.membranes_ms = r.report.timings_ms.at("membranes");
-    f.edits_ms = r.report.timings_ms.at("edits and checks");
+    take_report(r.report, f);
     f.total_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    f.genus_before = r.report.before.genus, f.genus_after = r.report.after.genus;
-    f.components_before = r.report.before.components, f.components_after = r.report.after.components;
-    f.edits = int(r.report.edits.size()), f.notes = int(r.report.notes.size());
     f.changed_pct = 100.0 * double(r.report.voxels_changed) / double(r.grid_vertices);
   } else {
     throw Error("unknown case " + name);
@@ -111,15 +115,16 @@ int main(int argc, char** argv) {
     else cases.push_back(argv[i]);
   }
   if (cases.empty()) cases = {"noisy:256", "gm"};
-  std::printf("%-10s %6s %6s %6s %6s %5s %5s %9s %9s %9s %9s %7s %8s %8s\n", "case", "genus", "after", "comp", "after", "edits",
-              "notes", "persist", "membrane", "edits", "total", "ratio", "changed", "peak");
+  std::printf("%-10s %6s %6s %6s %6s %5s %5s %6s %9s %9s %9s %9s %9s %9s %7s %8s %8s\n", "case", "genus", "after", "comp", "after",
+              "edits", "notes", "rounds", "persist", "membrane", "edits", "labels", "recheck", "total", "ratio", "changed", "peak");
   for (const std::string& name : cases) {
-    std::vector<double> p, m, e, t, mem;
+    std::vector<double> p, m, e, l, c, t, mem;
     Figures last;
     for (int r = 0; r < runs; ++r) {
       last = in_child(name);
       if (!last.ok) break;
       p.push_back(last.persistence_ms), m.push_back(last.membranes_ms), e.push_back(last.edits_ms), t.push_back(last.total_ms);
+      l.push_back(last.labels_ms), c.push_back(last.rechecks_ms);
       mem.push_back(last.peak_mb);
     }
     if (!last.ok) {
@@ -127,9 +132,10 @@ int main(int argc, char** argv) {
       continue;
     }
     const double pm = bench::median(p), tm = bench::median(t);
-    std::printf("%-10s %6d %6d %6d %6d %5d %5d %7.0fms %7.0fms %7.0fms %7.0fms %6.1fx %7.4f%% %6.0fMB\n", name.c_str(), last.genus_before,
-                last.genus_after, last.components_before, last.components_after, last.edits, last.notes, pm, bench::median(m),
-                bench::median(e), tm, tm / pm, last.changed_pct, bench::median(mem));
+    std::printf("%-10s %6d %6d %6d %6d %5d %5d %6d %7.0fms %7.0fms %7.0fms %7.0fms %7.0fms %7.0fms %6.1fx %7.4f%% %6.0fMB\n",
+                name.c_str(), last.genus_before, last.genus_after, last.components_before, last.components_after, last.edits,
+                last.notes, last.rounds, pm, bench::median(m), bench::median(e), bench::median(l), bench::median(c), tm, tm / pm,
+                last.changed_pct, bench::median(mem));
   }
   return 0;
 }

@@ -106,6 +106,49 @@ TEST(FilterFiles, MeshGoesToTheFilteredSurface) {
   fs::remove_all(d);
 }
 
+// A probability map to genus 0: a 64^3 block of the MNI grey-matter map (uint8, p = 0.5 at 128), 17 components
+// with 34 handles between them, each component left with genus 0; components and sealed cavities kept, a few
+// voxels changed, each moved across the iso value.
+TEST(FilterFiles, GreyMatterMapBlockGoesToGenusZero) {
+  const fs::path d = temp_dir("gm");
+  const VolumeImage gm = read_volume(std::string(CHOKELOOPS_DATA) + "/volumes/mni_icbm152_gm_tal_nlin_sym_09a_converted.nii.gz");
+  const int n = 64, o[3] = {90, 110, 90};
+  VolumeImage block = gm;
+  block.dims = {n, n, n};
+  block.values.assign(std::size_t(n) * n * n, 0.f);
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        block.values[std::size_t(i) + std::size_t(n) * (j + std::size_t(n) * k)] =
+            gm.values[std::size_t(i + o[0]) + std::size_t(gm.dims[0]) * (std::size_t(j + o[1]) + std::size_t(gm.dims[1]) * (k + o[2]))];
+  for (int r = 0; r < 3; ++r) block.affine[r][3] = gm.to_world(o[0], o[1], o[2])[std::size_t(r)];
+  const std::string in = (d / "block.nii.gz").string(), out = (d / "block_genus0.nii.gz").string();
+  write_scalar_volume(block, in);
+  FilterFileOptions opt;
+  opt.field.has_iso = true;
+  opt.field.iso = 128;
+  opt.filter.keep_genus = 0;
+  const FilterFileResult r = filter_file(in, out, opt);
+  std::string notes;
+  for (const auto& note : r.report.notes) notes += "\n  " + note;
+  EXPECT_EQ(r.report.before.genus, 34);
+  EXPECT_EQ(r.report.after.genus, 0) << notes;
+  EXPECT_EQ(r.output_check.genus, 0);
+  EXPECT_EQ(r.output_check.components, r.report.before.components);
+  EXPECT_EQ(r.output_check.cavities, r.report.before.cavities);
+  const VolumeImage back = read_volume(out);
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < back.values.size(); ++i)
+    if (back.values[i] != block.values[i]) {
+      ++changed;
+      EXPECT_NE(back.values[i] >= 128, block.values[i] >= 128) << "voxel " << i << " changed but stayed on its side";
+    }
+  EXPECT_EQ(changed, r.report.voxels_changed);
+  EXPECT_GT(changed, 33u);  // at least a voxel per pair
+  EXPECT_LT(changed, 400u);  // under 0.2% of the block
+  fs::remove_all(d);
+}
+
 TEST(FilterFiles, ImpossibleRequestsAreOneLineErrorsWithExitCode2) {
   const fs::path d = temp_dir("bad");
   const std::string mesh = std::string(CHOKELOOPS_SOURCE_DIR) + "/data/meshes/genus3_directional.off";

@@ -7,13 +7,15 @@
 // outside fills a tunnel). The values near an edit become the distance to the new surface where that is
 // nearer than the old one; every other value stays bit-identical.
 //
-// Why rounds and a check. Persistence decides what an edit did: after a batch, the genus must have
-// dropped with the components and sealed cavities unchanged. Edits of a failed batch that split a
-// component or sealed a cavity are found by one labelling and undone; otherwise the batch is split in
-// halves and each half checked again, so one edit that does something else (a membrane on a flat core,
-// two edits that touch) is undone and noted while the others stay. Pairs selected but left (e.g. their
-// membrane did not close) are asked again in the next round, from the edited field, with the other
-// membrane shape first (the flood's sheet on odd rounds, a plane on even ones).
+// Why rounds and a check. Each batch of edits is judged exactly, group by group (edits whose changed
+// vertices touch form a group; batch_check.h): a group must keep the components and sealed cavities (one
+// labelling of both sides after the batch) and lower the genus (its local change of the Euler
+// characteristic). Groups that fail are noted and undone, the others stay, with no bisection and no
+// persistence per check; one persistence per round then finds the pairs left and must agree with what the
+// labels and the Euler characteristic predicted (else an internal error). Pairs selected but left (e.g.
+// their membrane did not close, or their edit was undone) are asked again in the next round, from the
+// edited field, with the other membrane shape first (the flood's sheet on odd rounds, a plane on even
+// ones), the other side of the pair preferred, and never again as a lone saddle vertex.
 #include "chokeloops/filter/filter.h"
 
 #include <tbb/parallel_for.h>
@@ -28,6 +30,7 @@
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/topology/complex.h"
+#include "batch_check.h"
 
 namespace chokeloops {
 
@@ -150,14 +153,6 @@ void restore(ScalarGrid& grid, const Undo& undo) {
   for (auto it = undo.old_values.rbegin(); it != undo.old_values.rend(); ++it) grid.values[it->first] = it->second;
 }
 
-// A batch must leave the components and sealed cavities as they were and lower the genus, never below `floor`
-// (the pairs --keep-genus keeps). It may lower it by more than its size: an edit can take tiny pairs along
-// (two handles sharing a voxel go together); the report counts pairs removed from the genus itself.
-bool as_expected(const FilterSummary& got, const FilterSummary& before, int floor) {
-  return got.components == before.components && got.cavities == before.cavities && got.genus < before.genus &&
-         got.genus >= std::max(floor, 0);
-}
-
 // "cutting the handle of depth D at (x, y, z)": how the notes name an edit.
 std::string describe(const FilterEdit& e) {
   std::ostringstream s;
@@ -170,109 +165,127 @@ bool close_to(const std::array<double, 3>& a, const std::array<double, 3>& b, do
   return std::abs(a[0] - b[0]) <= h && std::abs(a[1] - b[1]) <= h && std::abs(a[2] - b[2]) <= h;
 }
 
-// Components of one side of the grid ({phi <= 0} when inside, else its complement) by the Freudenthal
-// neighbourhood; -1 on the other side.
-std::vector<std::int32_t> label_side(const ScalarGrid& grid, const FreudenthalComplex& cx, bool inside) {
-  std::vector<std::int32_t> label(grid.values.size(), -1);
-  std::vector<Id> stack;
-  std::int32_t next = 0;
-  auto on_side = [&](Id v) { return (grid.values[std::size_t(v)] <= 0) == inside; };
-  for (Id start = 0; start < Id(label.size()); ++start) {
-    if (label[std::size_t(start)] >= 0 || !on_side(start)) continue;
-    label[std::size_t(start)] = next;
-    stack.assign(1, start);
-    while (!stack.empty()) {
-      const Id v = stack.back();
-      stack.pop_back();
-      const auto c = cx.coords(v);
-      for (int k = 0; k < 14; ++k) {
-        if (!cx.neighbor_inside(c, k)) continue;
-        const Id u = v + cx.neighbor_delta(k);
-        if (label[std::size_t(u)] >= 0 || !on_side(u)) continue;
-        label[std::size_t(u)] = next;
-        stack.push_back(u);
-      }
+// The batch's edits joined into groups: edits whose changed vertices touch (share a Freudenthal edge or a
+// vertex) act together and are judged, kept or undone together.
+struct BatchGroups {
+  detail::SideChanges changes;            // every vertex that changed side, with its side before
+  std::vector<std::vector<Id>> vertices;  // per group, its changed vertices
+  std::vector<std::vector<std::size_t>> edits;  // per group, indices into the batch
+};
+
+BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<FilterEdit>& batch,
+                          const Undo& undo) {
+  BatchGroups g;
+  for (const auto& [v, old] : undo.old_values)
+    if (!g.changes.count(v)) g.changes.emplace(v, old <= 0);  // the first record holds the value before
+  for (auto it = g.changes.begin(); it != g.changes.end();)
+    it = it->second == (grid.values[std::size_t(it->first)] <= 0) ? g.changes.erase(it) : std::next(it);
+  std::vector<std::size_t> parent(batch.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::unordered_map<Id, std::size_t> owner;
+  for (std::size_t i = 0; i < batch.size(); ++i)
+    for (Id v : batch[i].voxels) {
+      if (!g.changes.count(v)) continue;
+      const auto [it, fresh] = owner.emplace(v, i);
+      if (!fresh) parent[find(i)] = find(it->second);
     }
-    ++next;
+  for (const auto& [v, i] : owner) {
+    const auto c = cx.coords(v);
+    for (int k = 0; k < 14; ++k) {
+      if (!cx.neighbor_inside(c, k)) continue;
+      const auto it = owner.find(v + cx.neighbor_delta(k));
+      if (it != owner.end()) parent[find(i)] = find(it->second);
+    }
   }
-  return label;
+  std::map<std::size_t, std::size_t> group_of_root;
+  for (std::size_t i = 0; i < batch.size(); ++i) {
+    const auto [it, fresh] = group_of_root.emplace(find(i), g.edits.size());
+    if (fresh) g.edits.emplace_back(), g.vertices.emplace_back();
+    g.edits[it->second].push_back(i);
+  }
+  for (const auto& [v, i] : owner) g.vertices[group_of_root[find(i)]].push_back(v);
+  for (auto& vs : g.vertices) std::sort(vs.begin(), vs.end());
+  return g;
 }
 
-// Applies `edits` and keeps those whose check passes (halves of a failed batch are checked on their own);
-// returns the kept ones and the summary of the field they leave.
-// `now` is the analysis of the field as it stands (updated with every batch kept).
-std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, int floor,
-                                      std::vector<std::string>& notes, std::vector<std::pair<Side, std::array<double, 3>>>& failed) {
+// Applies the edits and keeps the groups of them that remove pairs of the genus and nothing else: the
+// components and sealed cavities stay, the genus drops, never below `floor` (the pairs --keep-genus keeps).
+// A group may lower the genus by more than one pair (an edit can take tiny pairs along). Groups that fail
+// are noted and undone, and the rest applied again until every group passes. `labels` are the current
+// field's and follow it; `now` is its analysis, recomputed once at the end for the next round, and checked
+// against what the labels and the Euler characteristic predicted.
+std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, detail::SideLabels& labels,
+                                      int floor, std::vector<std::string>& notes,
+                                      std::vector<std::pair<Side, std::array<double, 3>>>& failed, double& t_labels,
+                                      double& t_persistence) {
   if (edits.empty()) return {};
+  const FreudenthalComplex cx(grid.dims);
   const FilterSummary current = now.summary;
-  const Undo undo = apply_edits(grid, edits);
-  Analysis after = analyse(grid);
-  const FilterSummary got = after.summary;
-  if (as_expected(got, current, floor)) {
-    now = std::move(after);
-    return edits;
-  }
-  // Edits that split a component (a cut whose solid neighbours fall into different components) or sealed a
-  // cavity (a fill whose outside neighbours do) are found by one labelling of the edited grid and dropped;
-  // a batch of thousands of edits then costs a few checks, not a bisection down to each culprit.
-  std::vector<char> suspect(edits.size(), 0);
-  std::size_t suspects = 0;
-  if (edits.size() > 1 && (got.components > current.components || got.cavities > current.cavities)) {
-    FreudenthalComplex cx(grid.dims);
-    for (int pass = 0; pass < 2; ++pass) {
-      const bool inside = pass == 0;
-      if (inside ? got.components <= current.components : got.cavities <= current.cavities) continue;
-      const std::vector<std::int32_t> label = label_side(grid, cx, inside);
-      for (std::size_t i = 0; i < edits.size(); ++i) {
-        if ((edits[i].side == Side::Handle) != inside || suspect[i]) continue;
-        std::int32_t first = -1;
-        for (Id v : edits[i].voxels) {
-          const auto c = cx.coords(v);
-          for (int k = 0; k < 14 && !suspect[i]; ++k) {
-            if (!cx.neighbor_inside(c, k)) continue;
-            const std::int32_t l = label[std::size_t(v + cx.neighbor_delta(k))];
-            if (l < 0) continue;
-            if (first < 0) first = l;
-            else if (l != first) suspect[i] = 1;
-          }
-          if (suspect[i]) break;
-        }
-        suspects += std::size_t(suspect[i]);
-      }
-    }
-  }
-  restore(grid, undo);
-  if (suspects > 0 && suspects < edits.size()) {
-    std::vector<FilterEdit> rest;
-    for (std::size_t i = 0; i < edits.size(); ++i) {
-      if (!suspect[i]) {
-        rest.push_back(std::move(edits[i]));
+  while (!edits.empty()) {
+    const Undo undo = apply_edits(grid, edits);
+    const BatchGroups groups = group_changes(grid, cx, edits, undo);
+    const auto t_l = Clock::now();
+    detail::SideLabels after = detail::label_sides(grid);
+    t_labels += ms_since(t_l);
+    // The groups in the order their best pair would be removed (least persistent first), so that the floor
+    // keeps the most persistent.
+    std::vector<std::size_t> order(groups.edits.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    auto persistence = [&](std::size_t gi) {
+      double p = 0;
+      for (std::size_t e : groups.edits[gi]) p = std::max(p, edits[e].persistence);
+      return p;
+    };
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return persistence(a) < persistence(b); });
+    std::vector<char> drop(edits.size(), 0);
+    bool dropped = false;
+    int genus = current.genus;
+    for (std::size_t gi : order) {
+      const detail::GroupVerdict v = detail::judge_group(grid, cx, groups.vertices[gi], groups.changes, labels, after);
+      std::string why;
+      if (groups.vertices[gi].empty()) why = "changed no vertex's side";
+      else if (v.on_border) why = "reached the side of the grid";
+      else if (!v.keeps_components) why = groups.edits[gi].size() > 1 ? "split, joined or removed a component (with the edits it touches)" : "split, joined or removed a component";
+      else if (!v.keeps_cavities) why = groups.edits[gi].size() > 1 ? "sealed or opened a cavity (with the edits it touches)" : "sealed or opened a cavity";
+      else if (v.euler_change <= 0) why = "did not lower the genus";
+      else if (genus - v.euler_change < std::max(floor, 0)) why = "would lower the genus below the pairs kept";
+      if (why.empty()) {
+        genus -= v.euler_change;
         continue;
       }
-      const FilterEdit& e = edits[i];
-      failed.push_back({e.side, e.point});
-      notes.push_back(describe(e) + (e.side == Side::Handle ? " split a component" : " sealed a cavity") +
-                      " (with the other edits of its round): undone");
+      dropped = true;
+      for (std::size_t e : groups.edits[gi]) {
+        drop[e] = 1;
+        failed.push_back({edits[e].side, edits[e].point});
+        notes.push_back(describe(edits[e]) + " " + why + ": undone");
+      }
     }
-    return apply_checked(grid, std::move(rest), now, floor, notes, failed);
+    if (!dropped) {
+      labels = std::move(after);
+      const auto t_p = Clock::now();
+      now = analyse(grid);
+      t_persistence += ms_since(t_p);
+      const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
+      if (now.summary.genus != predicted.genus || now.summary.components != predicted.components ||
+          now.summary.cavities != predicted.cavities)
+        throw InternalError("filter: persistence finds genus " + std::to_string(now.summary.genus) + ", " +
+                            std::to_string(now.summary.components) + " components, " + std::to_string(now.summary.cavities) +
+                            " cavities after a batch where labels and the Euler characteristic predict " +
+                            std::to_string(predicted.genus) + ", " + std::to_string(predicted.components) + ", " +
+                            std::to_string(predicted.cavities));
+      return edits;
+    }
+    restore(grid, undo);
+    std::vector<FilterEdit> rest;
+    for (std::size_t i = 0; i < edits.size(); ++i)
+      if (!drop[i]) rest.push_back(std::move(edits[i]));
+    edits = std::move(rest);
   }
-  if (edits.size() == 1) {
-    const FilterEdit& e = edits[0];
-    failed.push_back({e.side, e.point});
-    std::ostringstream s;
-    s << describe(e) << " left genus " << got.genus << ", " << got.components
-      << " components, " << got.cavities << " cavities (expected a genus below " << current.genus << ", " << current.components << ", "
-      << current.cavities << "): undone";
-    notes.push_back(s.str());
-    return {};
-  }
-  const std::size_t half = edits.size() / 2;
-  std::vector<FilterEdit> second(std::make_move_iterator(edits.begin() + std::ptrdiff_t(half)), std::make_move_iterator(edits.end()));
-  edits.resize(half);
-  std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, floor, notes, failed);
-  std::vector<FilterEdit> more = apply_checked(grid, std::move(second), now, floor, notes, failed);
-  kept.insert(kept.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
-  return kept;
+  return {};
 }
 
 }  // namespace
@@ -298,7 +311,12 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
   const double p_max = options.max_persistence.resolve(report.R_in + report.R_out);
   const double voxel_volume = grid.h(0) * grid.h(1) * grid.h(2);
   Analysis now = std::move(first);
-  double t_membranes = 0, t_edits = 0;
+  detail::SideLabels labels = detail::label_sides(grid);
+  if (labels.inside_components != now.summary.components || labels.cavities != now.summary.cavities)
+    throw InternalError("filter: persistence finds " + std::to_string(now.summary.components) + " components and " +
+                        std::to_string(now.summary.cavities) + " cavities, labelling " + std::to_string(labels.inside_components) +
+                        " and " + std::to_string(labels.cavities));
+  double t_membranes = 0, t_edits = 0, t_labels = 0, t_persistence = 0;
   std::vector<std::string> unresolved, undone;
   std::vector<std::pair<Side, std::array<double, 3>>> failed;  // edits undone as splitting or sealing
   int idle_rounds = 0;
@@ -329,13 +347,19 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     const auto t_m = Clock::now();
     // Odd rounds try the flood's contact sheet first, even rounds a plane straight across.
     const MembraneShape shape = round % 2 == 1 ? MembraneShape::Sheet : MembraneShape::Plane;
+    auto failed_before = [&](const Choke& g) {
+      for (const auto& [side, point] : failed)
+        if (side == g.side && close_to(point, g.point, grid.voxel_size)) return true;
+      return false;
+    };
     tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {
       Candidate& c = candidates[job / 2];
       const bool cut = job % 2 == 0;
       if (!(cut ? c.cut : c.fill)) return;
       MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
       const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
-      m = closing_membrane_voxels(grid, g, options.membrane, shape);
+      // An edit of this generator undone before is not tried again as its saddle alone.
+      m = closing_membrane_voxels(grid, g, options.membrane, shape, !failed_before(g));
       if (m.found && options.can_change)
         for (Id v : m.shore)
           if (!options.can_change(v)) {
@@ -351,11 +375,6 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       Side side = Side::Handle;
       const bool cut_ok = c.cut && c.cut_voxels.found, fill_ok = c.fill && c.fill_voxels.found;
       // A side whose edit split a component or sealed a cavity in an earlier round gives way to the other.
-      auto failed_before = [&](const Choke& g) {
-        for (const auto& [side, point] : failed)
-          if (side == g.side && close_to(point, g.point, grid.voxel_size)) return true;
-        return false;
-      };
       const bool cut_failed = cut_ok && fill_ok && failed_before(c.pair->handle);
       const bool fill_failed = cut_ok && fill_ok && failed_before(c.pair->tunnel);
       const bool cut_smaller = c.cut_voxels.shore.size() <= c.fill_voxels.shore.size();
@@ -380,7 +399,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     }
     const auto t_e = Clock::now();
     undone.clear();
-    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, options.keep_genus, undone, failed);
+    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, labels, options.keep_genus, undone, failed, t_labels, t_persistence);
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;
@@ -392,6 +411,8 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
   for (auto& u : unresolved) report.notes.push_back("not removed: " + u);
   report.timings_ms["membranes"] = t_membranes;
   report.timings_ms["edits and checks"] = t_edits;
+  report.timings_ms["labels"] = t_labels;
+  report.timings_ms["persistence after edits"] = t_persistence;
   report.after = now.summary;
   for (const FilterEdit& e : report.edits) report.max_edit_depth = std::max(report.max_edit_depth, e.depth);
   for (std::size_t v = 0; v < grid.values.size(); ++v) {

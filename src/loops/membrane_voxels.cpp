@@ -215,8 +215,8 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
 }
 
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
-                                       MembraneShape first) {
-  const bool sub_voxel = choke.depth < 0.5 * grid.voxel_size;
+                                       MembraneShape first, bool saddle_alone) {
+  const bool sub_voxel = saddle_alone && choke.depth < 0.5 * grid.voxel_size;
   const MembraneShape other = first == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
   std::vector<MembraneShape> order{first, other};
   if (sub_voxel) order.insert(order.begin(), MembraneShape::Saddle);

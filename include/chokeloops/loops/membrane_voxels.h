@@ -30,8 +30,9 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const
 
 // The first membrane that closes: `first` (Sheet or Plane), then the other of the two. A choke thinner than
 // half a voxel tries its saddle alone before both (a flood around noise would grow to the whole grid) and
-// only then. A membrane that throws counts as not closing; the last note says why none did.
+// only then (unless `saddle_alone` is false). A membrane that throws counts as not closing; the last note
+// says why none did.
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
-                                       MembraneShape first = MembraneShape::Sheet);
+                                       MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true);
 
 }  // namespace chokeloops

@@ -1,0 +1,136 @@
+#include "batch_check.h"
+
+#include <algorithm>
+
+#include <tbb/parallel_for.h>
+
+namespace chokeloops::detail {
+
+// Two passes of union-find (each vertex joins its seven backward Freudenthal neighbours of its side), the
+// first on z slabs in parallel, then the planes between slabs; a set's root is its smallest vertex, so the
+// ids, given in scan order, do not depend on the slabs or the threads.
+SideLabels label_sides(const ScalarGrid& grid) {
+  const FreudenthalComplex cx(grid.dims);
+  const Id n = cx.vertex_count();
+  if (n >= Id(1) << 31) throw Error("filter: the grid has more than 2^31 vertices", 3);
+  const auto& d = grid.dims;
+  std::vector<std::int32_t> parent(static_cast<std::size_t>(n));
+  auto find = [&](std::int32_t x) {
+    while (parent[std::size_t(x)] != x) {
+      parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
+      x = parent[std::size_t(x)];
+    }
+    return x;
+  };
+  auto unite = [&](std::int32_t a, std::int32_t b) {
+    a = find(a), b = find(b);
+    if (a == b) return;
+    if (a < b) std::swap(a, b);
+    parent[std::size_t(a)] = b;
+  };
+  auto inside = [&](Id v) { return grid.values[std::size_t(v)] <= 0; };
+  // Backward neighbour m (mask 1..7): (i,j,k) - mask(m), when it lies in the box and at z >= z_lo.
+  auto join_backward = [&](int i, int j, int k, int z_lo, bool only_dz) {
+    const Id v = cx.vertex(i, j, k);
+    const bool side = inside(v);
+    for (int m = 1; m < 8; ++m) {
+      const int dx = m & 1, dy = (m >> 1) & 1, dz = (m >> 2) & 1;
+      if (only_dz && !dz) continue;
+      if (i < dx || j < dy || k - dz < z_lo) continue;
+      const Id u = v - cx.offset(m);
+      if (inside(u) == side) unite(std::int32_t(v), std::int32_t(u));
+    }
+  };
+  const int slabs = std::max(1, std::min(d[2] / 8, 64));
+  auto slab_lo = [&](int s) { return int(std::int64_t(d[2]) * s / slabs); };
+  tbb::parallel_for(0, slabs, [&](int s) {
+    for (int k = slab_lo(s); k < slab_lo(s + 1); ++k)
+      for (int j = 0; j < d[1]; ++j)
+        for (int i = 0; i < d[0]; ++i) {
+          const Id v = cx.vertex(i, j, k);
+          parent[std::size_t(v)] = std::int32_t(v);
+          join_backward(i, j, k, slab_lo(s), false);
+        }
+  });
+  for (int s = 1; s < slabs; ++s)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i) join_backward(i, j, slab_lo(s), 0, true);
+  SideLabels out;
+  out.label.resize(static_cast<std::size_t>(n));
+  std::int32_t next_inside = 0, next_outside = 0;
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j)
+      for (int i = 0; i < d[0]; ++i) {
+        const Id v = cx.vertex(i, j, k);
+        const std::int32_t r = find(std::int32_t(v));
+        const bool in = inside(v);
+        std::int32_t id;
+        if (r == v) {
+          id = in ? next_inside++ : next_outside++;
+          if (!in) out.outside_reaches_border.push_back(0);
+        } else {
+          id = out.label[std::size_t(r)];
+        }
+        out.label[std::size_t(v)] = id;
+        if (!in && (i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1))
+          out.outside_reaches_border[std::size_t(id)] = 1;
+      }
+  out.inside_components = next_inside;
+  for (char b : out.outside_reaches_border) out.cavities += b ? 0 : 1;
+  return out;
+}
+
+GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
+                         const SideChanges& changes, const SideLabels& before, const SideLabels& after) {
+  GroupVerdict verdict;
+  auto inside_after = [&](Id u) { return grid.values[std::size_t(u)] <= 0; };
+  auto inside_before = [&](Id u) {
+    const auto it = changes.find(u);
+    return it != changes.end() ? it->second : inside_after(u);
+  };
+  // The labels each side shows around the group, before and after; one per side each time keeps b0, b2.
+  std::vector<std::int32_t> seen[2][2];  // [before/after][inside/outside]
+  auto see = [&](std::vector<std::int32_t>& ids, std::int32_t id) {
+    if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
+  };
+  const auto& link = freudenthal::vertex_link();
+  const auto& d = grid.dims;
+  for (Id v : group) {
+    const auto c = cx.coords(v);
+    verdict.on_border = verdict.on_border || c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == d[0] - 1 ||
+                        c[1] == d[1] - 1 || c[2] == d[2] - 1;
+    std::array<Id, 14> nb;
+    for (int k = 0; k < 14; ++k) nb[std::size_t(k)] = cx.neighbor_inside(c, k) ? v + cx.neighbor_delta(k) : -1;
+    auto look = [&](Id u) {
+      see(seen[0][inside_before(u) ? 0 : 1], before.label[std::size_t(u)]);
+      see(seen[1][inside_after(u) ? 0 : 1], after.label[std::size_t(u)]);
+    };
+    look(v);
+    for (Id u : nb)
+      if (u >= 0) look(u);
+    // chi = V - E + F - T over the solid's simplices; a simplex with several changed vertices is counted at
+    // its smallest one.
+    auto here = [&](Id u) { return u >= 0 && !(u < v && changes.count(u)); };
+    auto change = [&](std::initializer_list<Id> vs) {
+      bool b = true, a = true;
+      for (Id u : vs) b = b && inside_before(u), a = a && inside_after(u);
+      return int(a) - int(b);
+    };
+    verdict.euler_change += change({v});
+    for (Id u : nb)
+      if (here(u)) verdict.euler_change -= change({v, u});
+    for (const auto& e : link.edges) {
+      const Id a = nb[std::size_t(e[0])], b = nb[std::size_t(e[1])];
+      if (here(a) && here(b)) verdict.euler_change += change({v, a, b});
+    }
+    for (const auto& t : link.triangles) {
+      const Id a = nb[std::size_t(t[0])], b = nb[std::size_t(t[1])], c3 = nb[std::size_t(t[2])];
+      if (here(a) && here(b) && here(c3)) verdict.euler_change -= change({v, a, b, c3});
+    }
+  }
+  verdict.keeps_components = seen[0][0].size() == 1 && seen[1][0].size() == 1;
+  verdict.keeps_cavities = seen[0][1].size() == 1 && seen[1][1].size() == 1;
+  return verdict;
+}
+
+}  // namespace chokeloops::detail
