@@ -249,8 +249,8 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       std::string why;
       if (groups.vertices[gi].empty()) why = "changed no vertex's side";
       else if (v.on_border) why = "reached the side of the grid";
-      else if (!v.keeps_components) why = groups.edits[gi].size() > 1 ? "split, joined or removed a component (with the edits it touches)" : "split, joined or removed a component";
-      else if (!v.keeps_cavities) why = groups.edits[gi].size() > 1 ? "sealed or opened a cavity (with the edits it touches)" : "sealed or opened a cavity";
+      else if (!v.keeps_components) why = "split, joined or removed a component";
+      else if (!v.keeps_cavities) why = "sealed or opened a cavity";
       else if (v.euler_change <= 0) why = "did not lower the genus";
       else if (genus - v.euler_change < std::max(floor, 0)) why = "would lower the genus below the pairs kept";
       if (why.empty()) {
@@ -258,7 +258,17 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
         continue;
       }
       dropped = true;
-      for (std::size_t e : groups.edits[gi]) {
+      // Touching edits that fail together are tried one at a time: the group's most persistent edit stays in
+      // this batch, the others wait for the next round (their pairs are still there), unjudged.
+      const std::vector<std::size_t>& members = groups.edits[gi];
+      if (members.size() > 1 && !v.on_border) {
+        const std::size_t first = *std::max_element(members.begin(), members.end(), [&](std::size_t a, std::size_t b) {
+          return edits[a].persistence < edits[b].persistence;
+        });
+        for (std::size_t e : members) drop[e] = e != first;
+        continue;
+      }
+      for (std::size_t e : members) {
         drop[e] = 1;
         failed.push_back({edits[e].side, edits[e].point});
         notes.push_back(describe(edits[e]) + " " + why + ": undone");

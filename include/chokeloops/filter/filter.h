@@ -28,7 +28,7 @@ struct FilterOptions {
   Threshold max_persistence;  // pair persistence d - b at most this (% of R_in + R_out)
   int keep_genus = -1;        // >= 0: keep this many of the most persistent pairs, remove the others
   FilterMode mode = FilterMode::Auto;
-  int max_rounds = 8;         // edits are re-derived from the edited field until nothing selected is left
+  int max_rounds = 16;        // edits are re-derived from the edited field until nothing selected is left
   LoopOptions membrane;       // flood boxes (box_factor, box_margin)
   // May vertex v change side? (e.g. a label map: only its own voxels or background). Empty: every vertex.
   std::function<bool(Id v)> can_change;
