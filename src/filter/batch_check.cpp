@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 namespace chokeloops::detail {
@@ -55,25 +56,45 @@ SideLabels label_sides(const ScalarGrid& grid) {
   for (int s = 1; s < slabs; ++s)
     for (int j = 0; j < d[1]; ++j)
       for (int i = 0; i < d[0]; ++i) join_backward(i, j, slab_lo(s), 0, true);
+  // Ids in scan order, in parallel: every vertex finds its root (the set's smallest vertex; `parent` is only
+  // read now), the roots of each slab count their sides, and the counts' prefix sums number them.
   SideLabels out;
   out.label.resize(static_cast<std::size_t>(n));
-  std::int32_t next_inside = 0, next_outside = 0;
+  tbb::parallel_for(tbb::blocked_range<Id>(0, n, 1 << 16), [&](const tbb::blocked_range<Id>& r) {
+    for (Id v = r.begin(); v != r.end(); ++v) {
+      std::int32_t x = std::int32_t(v);
+      while (parent[std::size_t(x)] != x) x = parent[std::size_t(x)];
+      out.label[std::size_t(v)] = x;
+    }
+  });
+  const Id plane = Id(d[0]) * d[1];
+  std::vector<std::array<std::int32_t, 2>> roots(static_cast<std::size_t>(slabs) + 1, {0, 0});
+  tbb::parallel_for(0, slabs, [&](int s) {
+    for (Id v = slab_lo(s) * plane; v < slab_lo(s + 1) * plane; ++v)
+      if (parent[std::size_t(v)] == v) ++roots[std::size_t(s) + 1][inside(v) ? 0 : 1];
+  });
+  for (int s = 0; s < slabs; ++s)
+    for (int side = 0; side < 2; ++side) roots[std::size_t(s) + 1][side] += roots[std::size_t(s)][side];
+  tbb::parallel_for(0, slabs, [&](int s) {
+    std::array<std::int32_t, 2> next = roots[std::size_t(s)];
+    for (Id v = slab_lo(s) * plane; v < slab_lo(s + 1) * plane; ++v)
+      if (parent[std::size_t(v)] == v) out.label[std::size_t(v)] = next[inside(v) ? 0 : 1]++;
+  });
+  tbb::parallel_for(tbb::blocked_range<Id>(0, n, 1 << 16), [&](const tbb::blocked_range<Id>& r) {
+    for (Id v = r.begin(); v != r.end(); ++v)
+      if (parent[std::size_t(v)] != v) out.label[std::size_t(v)] = out.label[std::size_t(out.label[std::size_t(v)])];
+  });
+  const std::int32_t next_inside = roots[std::size_t(slabs)][0];
+  out.outside_reaches_border.assign(std::size_t(roots[std::size_t(slabs)][1]), 0);
   for (int k = 0; k < d[2]; ++k)
     for (int j = 0; j < d[1]; ++j)
       for (int i = 0; i < d[0]; ++i) {
-        const Id v = cx.vertex(i, j, k);
-        const std::int32_t r = find(std::int32_t(v));
-        const bool in = inside(v);
-        std::int32_t id;
-        if (r == v) {
-          id = in ? next_inside++ : next_outside++;
-          if (!in) out.outside_reaches_border.push_back(0);
-        } else {
-          id = out.label[std::size_t(r)];
+        if (!(i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1)) {
+          if (k > 0 && k < d[2] - 1 && j > 0 && j < d[1] - 1) i = d[0] - 2;  // the row's last vertex is next
+          continue;
         }
-        out.label[std::size_t(v)] = id;
-        if (!in && (i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1))
-          out.outside_reaches_border[std::size_t(id)] = 1;
+        const Id v = cx.vertex(i, j, k);
+        if (!inside(v)) out.outside_reaches_border[std::size_t(out.label[std::size_t(v)])] = 1;
       }
   out.inside_components = next_inside;
   for (char b : out.outside_reaches_border) out.cavities += b ? 0 : 1;
