@@ -330,6 +330,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
   std::vector<std::string> unresolved, undone;
   std::vector<std::pair<Side, std::array<double, 3>>> failed;  // edits undone as splitting or sealing
   int idle_rounds = 0;
+  bool wide_boxes = false;
   for (int round = 1; round <= options.max_rounds; ++round) {
     if (progress && !progress("filter", double(round - 1) / options.max_rounds)) throw Error("interrupted", 3);
     const std::vector<GenusPair> pairs = genus_pairs(now.chokes);
@@ -369,7 +370,11 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
       const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
       // An edit of this generator undone before is not tried again as its saddle alone.
-      m = closing_membrane_voxels(grid, g, options.membrane, shape, !failed_before(g));
+      // Boxes stay near the pair (a few times the box its depth asks for) until a round keeps nothing; then
+      // membranes may grow to the whole grid, for the few pairs left.
+      LoopOptions lo = options.membrane;
+      if (!wide_boxes) lo.max_box_radius = std::max(16, 4 * (int(std::ceil(lo.box_factor * g.depth / grid.voxel_size)) + lo.box_margin));
+      m = closing_membrane_voxels(grid, g, lo, shape, !failed_before(g));
       if (m.found && options.can_change)
         for (Id v : m.shore)
           if (!options.can_change(v)) {
@@ -413,6 +418,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;
+    if (idle_rounds == 1 && !wide_boxes) wide_boxes = true, idle_rounds = 0;
     for (auto& e : kept) report.edits.push_back(std::move(e));
     if (idle_rounds == 2) break;
   }

@@ -206,9 +206,10 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
       }
     }
     if (grow) {
-      if (r >= full) break;
-      r = std::min(full, int(std::ceil(r * 1.8)));
-      if (2 * r >= full) r = full;
+      const int cap = options.max_box_radius > 0 ? std::min(full, options.max_box_radius) : full;
+      if (r >= cap) break;
+      r = std::min(cap, int(std::ceil(r * 1.8)));
+      if (2 * r >= full) r = cap;
     }
   }
   return out;

@@ -20,6 +20,7 @@ struct LoopOptions {
   bool slide = true;         // after shortening, slide the loop along its normal to the narrowest section
   double box_factor = 1.5;   // local box half-size = box_factor * depth + box_margin voxels (grown on demand)
   int box_margin = 3;
+  int max_box_radius = 0;    // voxels; 0: boxes grow up to the whole grid
 };
 
 struct Loop {
