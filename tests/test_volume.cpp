@@ -88,6 +88,20 @@ ObliqueTorus oblique_torus() {
   return ot;
 }
 
+// The oblique torus's two loops, found where they must be: lengths in mm (the voxelised tube is ~half a voxel
+// fatter), the tunnel loop around the torus centre, the handle loop on the centre circle, in world mm.
+void expect_oblique_torus_loops(const AnalyzeResult& r, const ObliqueTorus& ot, const Loop*& hl, const Loop*& tl) {
+  const double R = 12, rr = 5;
+  EXPECT_EQ(r.chokes.handle_generators, 1);
+  hl = find_loop(r, Side::Handle, Kind::Generator);
+  tl = find_loop(r, Side::Tunnel, Kind::Generator);
+  ASSERT_TRUE(hl && tl);
+  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
+  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
+  EXPECT_LT(dist(r.frame.apply(tl->centroid), ot.centre_world), 1.0);
+  EXPECT_NEAR(dist(r.frame.apply(hl->centroid), ot.centre_world), R, 1.5);
+}
+
 }  // namespace
 
 TEST(VolumeMasks, VoxelisedTorus) {
@@ -176,7 +190,6 @@ TEST(VolumeMasks, DiagonalContactsFollowTheFreudenthalDiagonal) {
 TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   fs::path d = temp_dir("oblique");
   const std::array<double, 3> h{0.7, 1.0, 1.5};
-  const double R = 12, rr = 5;
   const ObliqueTorus ot = oblique_torus();
   const auto& Rm = ot.rotation;
   const auto& centre_world = ot.centre_world;
@@ -187,17 +200,9 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   EXPECT_EQ(in.transform_source, "sform");
   VolumeAnalysis a = analyze_volume(in, label(1), {});
   const AnalyzeResult& r = a.result;
-  EXPECT_EQ(r.chokes.handle_generators, 1);
-  const Loop* hl = find_loop(r, Side::Handle, Kind::Generator);
-  const Loop* tl = find_loop(r, Side::Tunnel, Kind::Generator);
+  const Loop *hl = nullptr, *tl = nullptr;
+  expect_oblique_torus_loops(r, ot, hl, tl);
   ASSERT_TRUE(hl && tl);
-  // Metric lengths with anisotropic spacing (mm); the voxelised tube is ~half a voxel fatter.
-  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
-  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
-  // World positions: the tunnel loop circles the torus centre, the handle loop lies on the centre circle.
-  const auto tc = r.frame.apply(tl->centroid), hc = r.frame.apply(hl->centroid);
-  EXPECT_LT(dist(tc, centre_world), 1.0);
-  EXPECT_NEAR(dist(hc, centre_world), R, 1.5);
   // The handle loop's plane contains the torus axis: its normal is perpendicular to the rotated z axis.
   const auto nrm = r.frame.rotate(hl->normal);
   EXPECT_LT(std::abs(nrm[0] * Rm[0][2] + nrm[1] * Rm[1][2] + nrm[2] * Rm[2][2]), 0.2);
@@ -253,21 +258,15 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
 TEST(VolumeWorld, ResampledToIsotropicVoxelsKeepsWorldPositions) {
   fs::path d = temp_dir("resampled");
   const ObliqueTorus ot = oblique_torus();
-  const double R = 12, rr = 5;
   VolumeFieldOptions f = label(1);
   f.voxel_size = 0.5;
   VolumeAnalysis a = analyze_volume(ot.image, f, {});
   const AnalyzeResult& r = a.result;
   for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r.grid.h(c), 0.5);
   EXPECT_EQ(r.surface_stats.genus, 1);
-  EXPECT_EQ(r.chokes.handle_generators, 1);
-  const Loop* hl = find_loop(r, Side::Handle, Kind::Generator);
-  const Loop* tl = find_loop(r, Side::Tunnel, Kind::Generator);
+  const Loop *hl = nullptr, *tl = nullptr;
+  expect_oblique_torus_loops(r, ot, hl, tl);
   ASSERT_TRUE(hl && tl);
-  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
-  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
-  EXPECT_LT(dist(r.frame.apply(tl->centroid), ot.centre_world), 1.0);
-  EXPECT_NEAR(dist(r.frame.apply(hl->centroid), ot.centre_world), R, 1.5);
   // The inside volume: the resampled mask's voxels (0.125 mm^3) against the input's (1.05 mm^3).
   const VolumeAnalysis native = analyze_volume(ot.image, label(1), {});
   const double v_native = 0.7 * 1.0 * 1.5;
