@@ -276,10 +276,17 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
     }
     if (!dropped) {
       labels = std::move(after);
+      const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
+      if (floor >= 0 && genus == floor) {
+        // --keep-genus reached: no pair is left to select, and the summary is known exactly without a
+        // persistence run (the file path still reads its output back and checks it by persistence).
+        now = Analysis{};
+        now.summary = predicted;
+        return edits;
+      }
       const auto t_p = Clock::now();
       now = analyse(grid);
       t_persistence += ms_since(t_p);
-      const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
       if (now.summary.genus != predicted.genus || now.summary.components != predicted.components ||
           now.summary.cavities != predicted.cavities)
         throw InternalError("filter: persistence finds genus " + std::to_string(now.summary.genus) + ", " +
