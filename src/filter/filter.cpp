@@ -222,10 +222,13 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
                                       int floor, std::vector<std::string>& notes,
                                       std::vector<std::pair<Side, std::array<double, 3>>>& failed, double& t_labels,
                                       double& t_persistence) {
-  if (edits.empty()) return {};
   const FreudenthalComplex cx(grid.dims);
-  const FilterSummary current = now.summary;
-  while (!edits.empty()) {
+  int genus = now.summary.genus;
+  std::vector<FilterEdit> kept, waiting;
+  // Waves: a batch is applied and judged until every group in it passes; edits that touched others that
+  // failed with them wait for the next wave, judged on the field the batch left.
+  while (!edits.empty() || !waiting.empty()) {
+    if (edits.empty()) edits = std::move(waiting), waiting.clear();
     const Undo undo = apply_edits(grid, edits);
     const BatchGroups groups = group_changes(grid, cx, edits, undo);
     const auto t_l = Clock::now();
@@ -241,9 +244,10 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       return p;
     };
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return persistence(a) < persistence(b); });
-    std::vector<char> drop(edits.size(), 0);
-    bool dropped = false;
-    int genus = current.genus;
+    enum Fate : char { Keep, Drop, Wait };
+    std::vector<Fate> fate(edits.size(), Keep);
+    bool all_pass = true;
+    int batch_genus = genus;
     for (std::size_t gi : order) {
       const detail::GroupVerdict v = detail::judge_group(grid, cx, groups.vertices[gi], groups.changes, labels, after);
       std::string why;
@@ -252,57 +256,63 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       else if (!v.keeps_components) why = "split, joined or removed a component";
       else if (!v.keeps_cavities) why = "sealed or opened a cavity";
       else if (v.euler_change <= 0) why = "did not lower the genus";
-      else if (genus - v.euler_change < std::max(floor, 0)) why = "would lower the genus below the pairs kept";
+      else if (batch_genus - v.euler_change < std::max(floor, 0)) why = "would lower the genus below the pairs kept";
       if (why.empty()) {
-        genus -= v.euler_change;
+        batch_genus -= v.euler_change;
         continue;
       }
-      dropped = true;
+      all_pass = false;
       // Touching edits that fail together are tried one at a time: the group's most persistent edit stays in
-      // this batch, the others wait for the next round (their pairs are still there), unjudged.
+      // this batch, the others wait for the next wave.
       const std::vector<std::size_t>& members = groups.edits[gi];
       if (members.size() > 1 && !v.on_border) {
         const std::size_t first = *std::max_element(members.begin(), members.end(), [&](std::size_t a, std::size_t b) {
           return edits[a].persistence < edits[b].persistence;
         });
-        for (std::size_t e : members) drop[e] = e != first;
+        for (std::size_t e : members) fate[e] = e == first ? Keep : Wait;
         continue;
       }
       for (std::size_t e : members) {
-        drop[e] = 1;
+        fate[e] = Drop;
         failed.push_back({edits[e].side, edits[e].point});
         notes.push_back(describe(edits[e]) + " " + why + ": undone");
       }
     }
-    if (!dropped) {
+    if (all_pass) {
       labels = std::move(after);
-      const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
-      if (floor >= 0 && genus == floor) {
-        // --keep-genus reached: no pair is left to select, and the summary is known exactly without a
-        // persistence run (the file path still reads its output back and checks it by persistence).
-        now = Analysis{};
-        now.summary = predicted;
-        return edits;
-      }
-      const auto t_p = Clock::now();
-      now = analyse(grid);
-      t_persistence += ms_since(t_p);
-      if (now.summary.genus != predicted.genus || now.summary.components != predicted.components ||
-          now.summary.cavities != predicted.cavities)
-        throw InternalError("filter: persistence finds genus " + std::to_string(now.summary.genus) + ", " +
-                            std::to_string(now.summary.components) + " components, " + std::to_string(now.summary.cavities) +
-                            " cavities after a batch where labels and the Euler characteristic predict " +
-                            std::to_string(predicted.genus) + ", " + std::to_string(predicted.components) + ", " +
-                            std::to_string(predicted.cavities));
-      return edits;
+      genus = batch_genus;
+      for (auto& e : edits) kept.push_back(std::move(e));
+      edits.clear();
+      continue;
     }
     restore(grid, undo);
     std::vector<FilterEdit> rest;
-    for (std::size_t i = 0; i < edits.size(); ++i)
-      if (!drop[i]) rest.push_back(std::move(edits[i]));
+    for (std::size_t i = 0; i < edits.size(); ++i) {
+      if (fate[i] == Keep) rest.push_back(std::move(edits[i]));
+      else if (fate[i] == Wait) waiting.push_back(std::move(edits[i]));
+    }
     edits = std::move(rest);
   }
-  return {};
+  if (kept.empty()) return kept;
+  const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
+  if (floor >= 0 && genus == floor) {
+    // --keep-genus reached: no pair is left to select, and the summary is known exactly without a
+    // persistence run (the file path still reads its output back and checks it by persistence).
+    now = Analysis{};
+    now.summary = predicted;
+    return kept;
+  }
+  const auto t_p = Clock::now();
+  now = analyse(grid);
+  t_persistence += ms_since(t_p);
+  if (now.summary.genus != predicted.genus || now.summary.components != predicted.components ||
+      now.summary.cavities != predicted.cavities)
+    throw InternalError("filter: persistence finds genus " + std::to_string(now.summary.genus) + ", " +
+                        std::to_string(now.summary.components) + " components, " + std::to_string(now.summary.cavities) +
+                        " cavities after a batch where labels and the Euler characteristic predict " +
+                        std::to_string(predicted.genus) + ", " + std::to_string(predicted.components) + ", " +
+                        std::to_string(predicted.cavities));
+  return kept;
 }
 
 }  // namespace
