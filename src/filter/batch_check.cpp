@@ -30,16 +30,26 @@ SideLabels label_sides(const ScalarGrid& grid) {
     parent[std::size_t(a)] = b;
   };
   auto inside = [&](Id v) { return grid.values[std::size_t(v)] <= 0; };
-  // Backward neighbour m (mask 1..7): (i,j,k) - mask(m), when it lies in the box and at z >= z_lo.
+  // Backward neighbour m (mask 1..7): (i,j,k) - mask(m), when it lies in the box and at z >= z_lo. Two backward
+  // neighbours whose masks nest are Freudenthal neighbours of each other, joined when the later of them was
+  // visited: so after joining v - M, the masks inside M are skipped (within a slab; across its lowest plane
+  // every one is joined, `only_dz`).
   auto join_backward = [&](int i, int j, int k, int z_lo, bool only_dz) {
+    static constexpr int kOrder[7] = {7, 6, 5, 3, 4, 2, 1};
     const Id v = cx.vertex(i, j, k);
     const bool side = inside(v);
-    for (int m = 1; m < 8; ++m) {
+    int joined[7], n_joined = 0;
+    for (int m : kOrder) {
       const int dx = m & 1, dy = (m >> 1) & 1, dz = (m >> 2) & 1;
       if (only_dz && !dz) continue;
       if (i < dx || j < dy || k - dz < z_lo) continue;
       const Id u = v - cx.offset(m);
-      if (inside(u) == side) unite(std::int32_t(v), std::int32_t(u));
+      if (inside(u) != side) continue;
+      bool nested = false;
+      for (int q = 0; q < n_joined && !only_dz; ++q) nested = nested || (m & joined[q]) == m;
+      if (nested) continue;
+      unite(std::int32_t(v), std::int32_t(u));
+      joined[n_joined++] = m;
     }
   };
   const int slabs = std::max(1, std::min(d[2] / 8, 64));
