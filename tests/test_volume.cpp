@@ -24,11 +24,16 @@
 #include "chokeloops/analyze_volume.h"
 #include "chokeloops/io/volume_io.h"
 #include "temp_dir.h"
+#include "volume_checks.h"
 #include "volume_images.h"
 
 using namespace chokeloops;
+using chokeloops::test::dist;
+using chokeloops::test::find_loop;
+using chokeloops::test::label;
 using chokeloops::test::make_image;
 using chokeloops::test::sphere_with_bridge;
+using chokeloops::test::torus;
 namespace fs = std::filesystem;
 
 namespace {
@@ -38,28 +43,6 @@ fs::path temp_dir(const std::string& name) { return test::temp_dir("volume_" + n
 VolumeAnalysis analyze_file(const std::string& path, VolumeFieldOptions f, AnalyzeOptions o = {}) {
   VolumeImage img = read_volume(path);
   return analyze_volume(img, f, o);
-}
-
-VolumeFieldOptions label(double n) {
-  VolumeFieldOptions f;
-  f.has_label = true;
-  f.label = n;
-  return f;
-}
-
-const Loop* find_loop(const AnalyzeResult& r, Side side, Kind kind) {
-  for (auto& l : r.loops)
-    if (l.choke.side == side && l.choke.kind == kind && l.found) return &l;
-  return nullptr;
-}
-
-double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
-float torus(double x, double y, double z, std::array<double, 3> c, double R, double r) {
-  const double q = std::hypot(x - c[0], y - c[1]) - R;
-  return std::hypot(q, z - c[2]) <= r ? 1.f : 0.f;
 }
 
 }  // namespace
@@ -169,19 +152,11 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   EXPECT_EQ(in.transform_source, "sform");
   VolumeAnalysis a = analyze_volume(in, label(1), {});
   const AnalyzeResult& r = a.result;
-  EXPECT_EQ(r.chokes.handle_generators, 1);
-  const Loop* hl = find_loop(r, Side::Handle, Kind::Generator);
-  const Loop* tl = find_loop(r, Side::Tunnel, Kind::Generator);
-  ASSERT_TRUE(hl && tl);
-  // Metric lengths with anisotropic spacing (mm); the voxelised tube is ~half a voxel fatter.
-  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
-  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
-  // World positions: the tunnel loop circles the torus centre, the handle loop lies on the centre circle.
+  // Metric lengths with anisotropic spacing (mm); world positions of the loops around the torus centre.
   std::array<double, 3> centre_world;
   for (int q = 0; q < 3; ++q) centre_world[q] = Rm[q][0] * c[0] + Rm[q][1] * c[1] + Rm[q][2] * c[2] + off[q];
-  const auto tc = r.frame.apply(tl->centroid), hc = r.frame.apply(hl->centroid);
-  EXPECT_LT(dist(tc, centre_world), 1.0);
-  EXPECT_NEAR(dist(hc, centre_world), R, 1.5);
+  const auto [hl, tl] = test::expect_torus_generator_loops(r, centre_world, R, rr);
+  ASSERT_TRUE(hl && tl);
   // The handle loop's plane contains the torus axis: its normal is perpendicular to the rotated z axis.
   const auto nrm = r.frame.rotate(hl->normal);
   EXPECT_LT(std::abs(nrm[0] * Rm[0][2] + nrm[1] * Rm[1][2] + nrm[2] * Rm[2][2]), 0.2);
