@@ -445,7 +445,7 @@ VolumeImage read_metaimage(const std::string& path, int volume) {
 
 void write_metaimage_labels(const VolumeImage& like, const std::vector<std::int32_t>& labels, const std::string& path) {
   // On the input's grid (its 3D affine, so a 4D input's labels are 3D) and always compressed: labels are mostly 0.
-  write_grid(like.dims, like.affine, MET_INT, labels.data(), true, path, static_cast<const MetaImage*>(like.header.get()));
+  write_grid(like.dims, like.affine, MET_INT, labels.data(), true, path, static_cast<const MetaHeader*>(like.header.get()));
 }
 
 void write_metaimage_scalar(const VolumeImage& image, const std::string& path, bool compress) {
