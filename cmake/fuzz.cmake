@@ -1,5 +1,5 @@
 # CHOKELOOPS_FUZZ=ON (with CXX=clang++): libFuzzer harnesses fuzz/fuzz_*.cpp for every input reader (meshes,
-# .vdb, PDB/mmCIF, NIfTI/NRRD), over the input stage (src/io, src/field) built with
+# .vdb, PDB/mmCIF, NIfTI/NRRD/MetaImage), over the input stage (src/io, src/field) built with
 # -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh. Included from the top
 # CMakeLists.txt, which then stops (no other targets).
 # The build type sets the optimisation (scripts/fuzz.sh: FUZZ_BUILD_TYPE, default RelWithDebInfo = -O2 -g;
@@ -47,3 +47,4 @@ chokeloops_add_fuzzer(fuzz_pdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.c
 chokeloops_add_fuzzer(fuzz_cif ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.cpp CHOKELOOPS_FUZZ_EXT=".cif")
 chokeloops_add_fuzzer(fuzz_nii ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".nii")
 chokeloops_add_fuzzer(fuzz_nrrd ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".nrrd")
+chokeloops_add_fuzzer(fuzz_mha ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".mha")

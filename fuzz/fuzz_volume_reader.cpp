@@ -1,6 +1,7 @@
-// libFuzzer harness for the volume reader (CHOKELOOPS_FUZZ_EXT: ".nii", ".nii.gz", ".nrrd"): the bytes become
-// a file and read_volume() (niftilib / teem) reads it, 4D inputs as their first volume. Headers announcing
-// huge images must be refused, not allocated. Only chokeloops::Error is an acceptable failure.
+// libFuzzer harness for the volume reader (CHOKELOOPS_FUZZ_EXT: ".nii", ".nii.gz", ".nrrd", ".mha"): the bytes
+// become a file and read_volume() (niftilib / teem / MetaIO) reads it, 4D inputs as their first volume.
+// Headers announcing huge images must be refused, not allocated. Only chokeloops::Error is an acceptable
+// failure.
 #include <unistd.h>
 
 #include <cstddef>

@@ -12,7 +12,7 @@ PKGS=(
   nlohmann-json3-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed
   gemmi-dev tao-pegtl-dev
-  libnifti2-dev libteem-dev
+  libnifti2-dev libteem-dev libinsighttoolkit5-dev
   chromium
 )
 if [ "${1:-}" = fuzz ]; then PKGS+=(clang libfuzzer-14-dev); fi

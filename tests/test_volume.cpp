@@ -24,11 +24,16 @@
 #include "chokeloops/analyze_volume.h"
 #include "chokeloops/io/volume_io.h"
 #include "temp_dir.h"
+#include "volume_checks.h"
 #include "volume_images.h"
 
 using namespace chokeloops;
+using chokeloops::test::dist;
+using chokeloops::test::find_loop;
+using chokeloops::test::label;
 using chokeloops::test::make_image;
 using chokeloops::test::sphere_with_bridge;
+using chokeloops::test::torus;
 namespace fs = std::filesystem;
 
 namespace {
@@ -38,28 +43,6 @@ fs::path temp_dir(const std::string& name) { return test::temp_dir("volume_" + n
 VolumeAnalysis analyze_file(const std::string& path, VolumeFieldOptions f, AnalyzeOptions o = {}) {
   VolumeImage img = read_volume(path);
   return analyze_volume(img, f, o);
-}
-
-VolumeFieldOptions label(double n) {
-  VolumeFieldOptions f;
-  f.has_label = true;
-  f.label = n;
-  return f;
-}
-
-const Loop* find_loop(const AnalyzeResult& r, Side side, Kind kind) {
-  for (auto& l : r.loops)
-    if (l.choke.side == side && l.choke.kind == kind && l.found) return &l;
-  return nullptr;
-}
-
-double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
-float torus(double x, double y, double z, std::array<double, 3> c, double R, double r) {
-  const double q = std::hypot(x - c[0], y - c[1]) - R;
-  return std::hypot(q, z - c[2]) <= r ? 1.f : 0.f;
 }
 
 // A torus mask (R 12, r 5 mm, axis along the image's k) on a 64x48x29 lattice of spacing 0.7 x 1 x 1.5 mm,
@@ -86,20 +69,6 @@ ObliqueTorus oblique_torus() {
     ot.centre_world[r] = ot.rotation[r][0] * c[0] + ot.rotation[r][1] * c[1] + ot.rotation[r][2] * c[2] + off[r];
   }
   return ot;
-}
-
-// The oblique torus's two loops, found where they must be: lengths in mm (the voxelised tube is ~half a voxel
-// fatter), the tunnel loop around the torus centre, the handle loop on the centre circle, in world mm.
-void expect_oblique_torus_loops(const AnalyzeResult& r, const ObliqueTorus& ot, const Loop*& hl, const Loop*& tl) {
-  const double R = 12, rr = 5;
-  EXPECT_EQ(r.chokes.handle_generators, 1);
-  hl = find_loop(r, Side::Handle, Kind::Generator);
-  tl = find_loop(r, Side::Tunnel, Kind::Generator);
-  ASSERT_TRUE(hl && tl);
-  EXPECT_NEAR(tl->length, 2 * M_PI * (R - rr), 0.1 * 2 * M_PI * (R - rr));
-  EXPECT_NEAR(hl->length, 2 * M_PI * rr, 0.15 * 2 * M_PI * rr);
-  EXPECT_LT(dist(r.frame.apply(tl->centroid), ot.centre_world), 1.0);
-  EXPECT_NEAR(dist(r.frame.apply(hl->centroid), ot.centre_world), R, 1.5);
 }
 
 }  // namespace
@@ -200,8 +169,7 @@ TEST(VolumeWorld, ObliqueSformAnisotropicSpacingLoopsAtKnownWorldPositions) {
   EXPECT_EQ(in.transform_source, "sform");
   VolumeAnalysis a = analyze_volume(in, label(1), {});
   const AnalyzeResult& r = a.result;
-  const Loop *hl = nullptr, *tl = nullptr;
-  expect_oblique_torus_loops(r, ot, hl, tl);
+  const auto [hl, tl] = test::expect_torus_generator_loops(r, centre_world, 12, 5);
   ASSERT_TRUE(hl && tl);
   // The handle loop's plane contains the torus axis: its normal is perpendicular to the rotated z axis.
   const auto nrm = r.frame.rotate(hl->normal);
@@ -264,8 +232,7 @@ TEST(VolumeWorld, ResampledToIsotropicVoxelsKeepsWorldPositions) {
   const AnalyzeResult& r = a.result;
   for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(r.grid.h(c), 0.5);
   EXPECT_EQ(r.surface_stats.genus, 1);
-  const Loop *hl = nullptr, *tl = nullptr;
-  expect_oblique_torus_loops(r, ot, hl, tl);
+  const auto [hl, tl] = test::expect_torus_generator_loops(r, ot.centre_world, 12, 5);
   ASSERT_TRUE(hl && tl);
   // The inside volume: the resampled mask's voxels (0.125 mm^3) against the input's (1.05 mm^3).
   const VolumeAnalysis native = analyze_volume(ot.image, label(1), {});

@@ -1,5 +1,5 @@
 #pragma once
-// `chokeloops analyze` on a medical volume (.nii, .nii.gz, .nrrd, .nhdr): see cmd_analyze_volume.cpp.
+// `chokeloops analyze` on a medical volume (.nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd): see cmd_analyze_volume.cpp.
 #include <functional>
 #include <string>
 

@@ -22,8 +22,8 @@ namespace {
 const char* kUsage = R"(usage: chokeloops analyze INPUT -o OUTDIR [options]
 
 INPUT is a mesh (.obj .ply .off .stl), a .vdb level set / density grid, a molecule (.pdb .cif .ent .mmcif,
-optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (.nii .nii.gz .hdr .nrrd .nhdr)
-with one of --iso, --label, --labels all.
+optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (.nii .nii.gz .hdr .nrrd .nhdr
+.mha .mhd) with one of --iso, --label, --labels all.
   -o, --output DIR          output directory (surface.ply, loops.ply, loops.obj, loops.json, view.html)
   --resolution N|auto       voxels along the longest side (default 256); auto: the coarsest grid that keeps
                             a closed input mesh's genus and components (up to 1024 or --max-memory)
@@ -54,13 +54,14 @@ Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are wri
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
   --probe R                 probe radius for sas/ses, Å (default 1.4)
   --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
-Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD; distances in mm with
-the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD) on the input's grid too):
+Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD, LPS for MetaImage;
+distances in mm with the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD, .mha
+for MetaImage) on the input's grid too):
   --iso T                   scalar image: inside where the stored value is >= T
   --inside above|below      below: inside where the value is < T
   --label N                 label map: the voxels equal to N (boundary halfway between voxels)
   --labels all              one analysis per non-zero label into OUTDIR/label_N/, index in OUTDIR/labels.json
-  --volume K                the K-th volume (from 0) of a 4D image
+  --volume K                the K-th volume (from 0) of a 4D image (a MetaImage's channel K too)
   --expect-genus G          list handle generators beyond the G most persistent as topology defects
   --voxel-size MM           resample onto an isotropic lattice of MM along the image's axes (trilinear;
                             default: the image's own spacing, anisotropic allowed)
@@ -252,7 +253,7 @@ int run(std::vector<std::string> args) {
     return cli::run_volume(input, outdir, options, vo, std::ref(progress));
   }
   if (volume_options)
-    throw Error("--iso, --inside, --label, --labels, --volume and --expect-genus apply to volumes (.nii, .nii.gz, .nrrd, .nhdr) only");
+    throw Error("--iso, --inside, --label, --labels, --volume and --expect-genus apply to volumes (.nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd) only");
   AnalyzeResult r = analyze(input, options, std::ref(progress));
   auto t = std::chrono::steady_clock::now();
   write_report(r, options, outdir);

@@ -18,7 +18,8 @@ filled (they join it). Values away from the edits stay bit-identical; the output
 components and cavities checked.
 INPUT and OUTPUT: a .vdb level set -> .vdb; a mesh (.obj .ply .off .stl) -> the filtered surface as .ply (the
 marching surface of the grid: every triangle is new, not only those near the edits); a volume (.nii .nii.gz
-.nrrd, with --iso or --label) -> the same format, header and datatype, only the edited voxels changed.
+.nrrd .mha .mhd, with --iso or --label) -> the same format, header and datatype, only the edited voxels changed
+(a MetaImage as .mha, or as .mhd with its .raw/.zraw beside it, whichever OUTPUT names).
 Selection (at least one):
   --max-depth D             edits whose depth is at most D: percentage of R_in (cuts) / R_out (fills), e.g. 5%,
                             or a length in input units

@@ -1,13 +1,12 @@
 // NIfTI-1/2 through niftilib's nifti2_io (reads both versions, .gz included), NRRD through teem's nrrd.
-// Both libraries are Debian packages (libnifti2-dev, libteem-dev); see README "Volumes" for why not ITK.
+// Both libraries are Debian packages (libnifti2-dev, libteem-dev); see README "Medical volumes" for why not
+// all of ITK. MetaImage is in metaimage_io.cpp; this file dispatches to it.
 #include "chokeloops/io/volume_io.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <type_traits>
-#include <limits>
 #include <fstream>
 
 #include <nifti/nifti2_io.h>
@@ -15,21 +14,16 @@
 
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/grid.h"
+#include "volume_io_common.h"
 
 namespace chokeloops {
 
-namespace {
+namespace volume_detail {
 
 bool ends_with(const std::string& s, const std::string& tail) {
   if (s.size() < tail.size()) return false;
   return std::equal(tail.rbegin(), tail.rend(), s.rbegin(), [](char a, char b) { return std::tolower(a) == b; });
 }
-
-bool is_nifti(const std::string& p) {
-  return ends_with(p, ".nii") || ends_with(p, ".nii.gz") || ends_with(p, ".hdr") || ends_with(p, ".img") ||
-         ends_with(p, ".hdr.gz") || ends_with(p, ".img.gz");
-}
-bool is_nrrd(const std::string& p) { return ends_with(p, ".nrrd") || ends_with(p, ".nhdr"); }
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(path + ": " + what); }
 
@@ -64,6 +58,13 @@ void finish_affine(VolumeImage& v) {
   if (worst > 1e-3)
     v.warnings.push_back("the image axes are not orthogonal (sheared transform, cosine " + std::to_string(worst) +
                          "): distances are measured along the voxel axes, positions are exact");
+  // Axes that are (nearly) linearly dependent map distinct voxels to one world point: no position is meaningful.
+  const auto& m = v.affine;
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  if (!(std::abs(det) > 1e-6 * v.spacing[0] * v.spacing[1] * v.spacing[2]))
+    fail(v.path, "the index-to-world transform (" + v.transform_source +
+                     ") is singular: its axes are linearly dependent");
 }
 
 void check_values(const VolumeImage& v) {
@@ -75,6 +76,38 @@ void check_values(const VolumeImage& v) {
                        "; the image must hold finite values");
     }
 }
+
+std::vector<std::uint8_t> packed_values(const VolumeImage& image) {
+  const std::size_t n = std::size_t(image.voxel_count());
+  if (image.values.size() != n) throw std::logic_error("packed_values: values do not match dims");
+  std::vector<std::uint8_t> bytes;
+  auto pack = [&](auto tag) {
+    using T = decltype(tag);
+    bytes.resize(n * sizeof(T));
+    for (std::size_t i = 0; i < n; ++i) {
+      T v = T(image.values[i]);
+      std::memcpy(&bytes[i * sizeof(T)], &v, sizeof(T));
+    }
+  };
+  if (image.datatype == "uint8") pack(std::uint8_t{});
+  else if (image.datatype == "int16") pack(std::int16_t{});
+  else if (image.datatype == "int32") pack(std::int32_t{});
+  else if (image.datatype == "float32") pack(float{});
+  else throw std::logic_error("write_scalar_volume: datatype " + image.datatype);
+  return bytes;
+}
+
+}  // namespace volume_detail
+
+using namespace volume_detail;
+
+namespace {
+
+bool is_nifti(const std::string& p) {
+  return ends_with(p, ".nii") || ends_with(p, ".nii.gz") || ends_with(p, ".hdr") || ends_with(p, ".img") ||
+         ends_with(p, ".hdr.gz") || ends_with(p, ".img.gz");
+}
+bool is_nrrd(const std::string& p) { return ends_with(p, ".nrrd") || ends_with(p, ".nhdr"); }
 
 VolumeImage read_nifti(const std::string& path, int volume) {
   nifti_set_debug_level(0);  // the library's own messages would break the one-line error
@@ -274,14 +307,17 @@ VolumeImage read_nrrd(const std::string& path, int volume) {
 
 }  // namespace
 
-bool is_volume_path(const std::string& path) { return is_nifti(path) || is_nrrd(path); }
+bool is_volume_path(const std::string& path) {
+  return is_nifti(path) || is_nrrd(path) || metaimage::is_metaimage_path(path);
+}
 
 VolumeImage read_volume(const std::string& path, int volume) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) fail(path, "no such file");
   if (is_nifti(path)) return read_nifti(path, volume);
   if (is_nrrd(path)) return read_nrrd(path, volume);
-  fail(path, "not a volume this program reads (.nii, .nii.gz, .hdr/.img, .nrrd, .nhdr)");
+  if (metaimage::is_metaimage_path(path)) return metaimage::read_metaimage(path, volume);
+  fail(path, "not a volume this program reads (.nii, .nii.gz, .hdr/.img, .nrrd, .nhdr, .mha, .mhd)");
 }
 
 namespace {
@@ -296,6 +332,7 @@ void save_nrrd_gzip(const Nrrd* nrrd, const std::string& path) {
 }  // namespace
 
 std::string label_volume_name(const VolumeImage& like, const std::string& stem) {
+  if (like.format == "metaimage") return stem + ".mha";
   return stem + (like.format == "nrrd" ? ".nrrd" : ".nii.gz");
 }
 
@@ -309,6 +346,10 @@ void write_label_volume(const VolumeImage& like, const std::vector<std::int32_t>
     v.datatype = "int32";
     v.values.assign(labels.begin(), labels.end());
     write_scalar_volume(v, path);
+    return;
+  }
+  if (like.format == "metaimage") {
+    metaimage::write_metaimage_labels(like, labels, path);
     return;
   }
   if (like.format == "nrrd") {
@@ -350,26 +391,17 @@ void write_label_volume(const VolumeImage& like, const std::vector<std::int32_t>
   if (!std::filesystem::is_regular_file(path, ec)) throw Error("cannot write " + path, 3);
 }
 
-void write_scalar_volume(const VolumeImage& image, const std::string& path) {
-  const std::size_t n = std::size_t(image.voxel_count());
-  if (image.values.size() != n) throw std::logic_error("write_scalar_volume: values do not match dims");
-  std::vector<std::uint8_t> bytes;
-  int nifti_type = 0, nrrd_type = 0, size = 0;
-  auto pack = [&](auto tag) {
-    using T = decltype(tag);
-    size = int(sizeof(T));
-    bytes.resize(n * sizeof(T));
-    for (std::size_t i = 0; i < n; ++i) {
-      T v = T(image.values[i]);
-      std::memcpy(&bytes[i * sizeof(T)], &v, sizeof(T));
-    }
-  };
-  if (image.datatype == "uint8") { pack(std::uint8_t{}); nifti_type = DT_UINT8; nrrd_type = nrrdTypeUChar; }
-  else if (image.datatype == "int16") { pack(std::int16_t{}); nifti_type = DT_INT16; nrrd_type = nrrdTypeShort; }
-  else if (image.datatype == "int32") { pack(std::int32_t{}); nifti_type = DT_INT32; nrrd_type = nrrdTypeInt; }
-  else if (image.datatype == "float32") { pack(float{}); nifti_type = DT_FLOAT32; nrrd_type = nrrdTypeFloat; }
-  else throw std::logic_error("write_scalar_volume: datatype " + image.datatype);
-  (void)size;
+void write_scalar_volume(const VolumeImage& image, const std::string& path, bool compress) {
+  if (metaimage::is_metaimage_path(path)) {
+    metaimage::write_metaimage_scalar(image, path, compress);
+    return;
+  }
+  std::vector<std::uint8_t> bytes = packed_values(image);
+  int nifti_type = 0, nrrd_type = 0;
+  if (image.datatype == "uint8") { nifti_type = DT_UINT8; nrrd_type = nrrdTypeUChar; }
+  else if (image.datatype == "int16") { nifti_type = DT_INT16; nrrd_type = nrrdTypeShort; }
+  else if (image.datatype == "int32") { nifti_type = DT_INT32; nrrd_type = nrrdTypeInt; }
+  else { nifti_type = DT_FLOAT32; nrrd_type = nrrdTypeFloat; }
   if (is_nrrd(path)) {
     std::shared_ptr<Nrrd> out(nrrdNew(), [](Nrrd* p) { nrrdNix(p); });
     std::size_t sz[3] = {std::size_t(image.dims[0]), std::size_t(image.dims[1]), std::size_t(image.dims[2])};
@@ -412,19 +444,6 @@ void write_scalar_volume(const VolumeImage& image, const std::string& path) {
 
 namespace {
 
-// Stores `value` (scaled units) into raw element `i` of type T: the inverse of the reader's scaling,
-// rounded and clamped for integer types.
-template <class T>
-void store(void* data, std::size_t i, double value) {
-  if constexpr (std::is_integral_v<T>) {
-    const double r = std::round(value);
-    const double lo = double(std::numeric_limits<T>::lowest()), hi = double(std::numeric_limits<T>::max());
-    static_cast<T*>(data)[i] = T(std::min(hi, std::max(lo, r)));
-  } else {
-    static_cast<T*>(data)[i] = T(value);
-  }
-}
-
 bool store_by_nifti_type(int type, void* data, std::size_t i, double v) {
   switch (type) {
     case DT_UINT8: store<std::uint8_t>(data, i, v); return true;
@@ -461,6 +480,10 @@ bool store_by_nrrd_type(int type, void* data, std::size_t i, double v) {
 
 void write_edited_volume(const VolumeImage& like, const std::vector<std::pair<std::int64_t, double>>& changes,
                          const std::string& path) {
+  if (like.format == "metaimage") {
+    metaimage::write_metaimage_edited(like, changes, path);
+    return;
+  }
   const std::size_t offset = std::size_t(like.volume) * std::size_t(like.voxel_count());
   if (like.format == "nrrd") {
     if (!is_nrrd(path)) throw Error(path + ": the input is NRRD; write the filtered image as .nrrd");
