@@ -144,7 +144,7 @@ TEST(MetaImageWorld, HandWrittenObliqueTransformMatrixPutsLoopsAtKnownLpsPositio
   EXPECT_NEAR(hl->choke.depth, rr, 1.0);
 
   write_report(r, {}, (d / "out").string());
-  const auto names = write_loop_volumes(a, in, (d / "out").string());
+  const auto names = write_loop_volumes(a, in, (d / "out").string()).files;
   ASSERT_EQ(names[0], "loops.mha");
   nlohmann::json j;
   std::ifstream(d / "out" / "loops.json") >> j;
