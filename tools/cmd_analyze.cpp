@@ -48,7 +48,10 @@ with one of --iso, --label, --labels all.
                             all otherwise); the rest are counted
 Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are written too):
   --model N                 model number (default 1)
-  --chains A,B              keep only these chains (default all)
+  --chains A,B              keep only these chains (default all; with --assembly, the file's chains,
+                            every copy kept)
+  --assembly ID|none        build biological assembly ID from the file's REMARK 350 / _pdbx_struct_assembly
+                            (copies of chain C named C1, C2, ...); default none: the coordinates as stored
   --ignore RES,...          residue names to drop (default waters and common ions; "" keeps all)
   --radii bondi|amber       van der Waals radii: Bondi 1964 (default) or HOLE's simple.rad (amber)
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
@@ -123,6 +126,7 @@ int run(std::vector<std::string> args) {
     else if (in.is("-o", "--output")) outdir = in.value();
     else if (in.is("--model")) molecule.read.model = int(in.integer(1, 1000000)), molecule_flags.push_back("--model");
     else if (in.is("--chains")) molecule.read.chains = split_list(in.value()), molecule_flags.push_back("--chains");
+    else if (in.is("--assembly")) molecule.read.assembly = in.value(), molecule_flags.push_back("--assembly");
     else if (in.is("--ignore")) {
       molecule.read.ignore = split_list(in.value());
       molecule.read.ignore_set = true;

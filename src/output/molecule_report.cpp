@@ -92,8 +92,10 @@ void write_molecule_report(const MoleculeAnalysis& m, const MoleculeOptions& opt
   {
     auto out = open_out(outdir + "/view.pml");
     std::string structure = std::filesystem::absolute(mol.path).string();
-    out << "# PyMOL: pymol " << outdir << "/view.pml\n"
-        << "load " << structure << ", structure\n"
+    out << "# PyMOL: pymol " << outdir << "/view.pml\n";
+    // PyMOL builds assemblies of mmCIF files only; for a PDB file the paths overlay its first copy
+    if (!mol.assembly.empty()) out << "set assembly, " << mol.assembly << "\n";
+    out << "load " << structure << ", structure\n"
         << "hide everything, structure\nshow sticks, structure\nshow surface, structure\nset transparency, 0.6\n"
         << "load " << std::filesystem::absolute(outdir + "/channels.pdb").string() << ", paths\n"
         << "alter paths, vdw=b\nrebuild\nshow spheres, paths\nspectrum b, red_yellow_blue, paths\n"
@@ -125,6 +127,8 @@ void write_molecule_report(const MoleculeAnalysis& m, const MoleculeOptions& opt
   j["molecule"] = {{"atoms", mol.atoms.size()},
                    {"ignored_atoms", mol.ignored_atoms},
                    {"model", mol.model},
+                   {"assembly", mol.assembly.empty() ? "none" : mol.assembly},
+                   {"assembly_operators", mol.assembly_operators},
                    {"surface", to_string(options.field.surface)},
                    {"probe", options.field.probe},
                    {"radii", options.read.radii == RadiusSet::Amber ? "amber" : "bondi"}};
