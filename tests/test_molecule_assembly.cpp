@@ -202,3 +202,45 @@ _pdbx_struct_oper_list.vector[3]
   fs::remove_all(dir);
 }
 
+// The tetramer of the channel subunit (four copies of chain C) end to end: its K+ pore runs along the 4-fold
+// axis and is narrowest in the selectivity filter (TVGYG, 75-79), at the Thr75 carbonyls of all four copies
+// (0.747 A at 0.5 A voxels; narrower than CAVER's 0.9 A probe, so --min-radius 0.7 traces it).
+TEST(MoleculeAssembly, KcsAPoreRunsAlongTheFourFoldAxisThroughTheFilter) {
+  AnalyzeOptions ao;
+  ao.levelset.voxel_size = 0.5;
+  ao.chokes.handles = false;
+  MoleculeOptions mo;
+  mo.read.assembly = "1";
+  mo.read.chains = {"C"};
+  mo.channels.trace_unsectioned = false;
+  mo.channels.min_radius = 0.7;
+  MoleculeAnalysis m = analyze_molecule(kKcsA, ao, mo);
+  MoleculeReadOptions c_only;
+  c_only.chains = {"C"};
+  EXPECT_EQ(m.molecule.atoms.size(), 4 * read_molecule(kKcsA, c_only).atoms.size());
+
+  const Channel* pore = nullptr;
+  for (auto& c : m.channels)
+    if (c.traced && std::hypot(c.bottleneck[0] - kAxisXY, c.bottleneck[1] - kAxisXY) < 0.5) pore = &c;
+  ASSERT_NE(pore, nullptr) << "no traced tunnel with its bottleneck on the 4-fold axis";
+  EXPECT_GT(std::abs(pore->axis[2]), 0.95);
+  EXPECT_NEAR(pore->bottleneck_radius, 0.75, 0.1);
+  EXPECT_TRUE(pore->open[0] && pore->open[1]);
+  EXPECT_GT(pore->length, 30.0);
+  std::set<std::string> filter;
+  for (auto& l : pore->bottleneck_lining) {
+    const MolAtom& a = m.molecule.atoms[std::size_t(l.atom)];
+    if (a.resseq >= 75 && a.resseq <= 79) filter.insert(a.chain);
+  }
+  EXPECT_EQ(filter, (std::set<std::string>{"C1", "C2", "C3", "C4"}));
+  // through the filter the path stays on the axis
+  int on_axis = 0;
+  for (auto& p : pore->profile)
+    if (std::abs(p.s) <= 8) {
+      EXPECT_LT(std::hypot(p.p[0] - kAxisXY, p.p[1] - kAxisXY), 1.0) << "s " << p.s;
+      ++on_axis;
+    }
+  EXPECT_GT(on_axis, 8);
+  const Loop& loop = m.result.loops[std::size_t(pore->loop)];
+  EXPECT_TRUE(loop.found || !loop.note.empty());
+}

@@ -56,6 +56,8 @@ Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are wri
   --radii bondi|amber       van der Waals radii: Bondi 1964 (default) or HOLE's simple.rad (amber)
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
   --probe R                 probe radius for sas/ses, Å (default 1.4)
+  --min-radius R            tunnels with a bottleneck narrower than R Å get the bottleneck and a note, no
+                            profile or loop (default 0.9, CAVER's probe; 0 traces all)
   --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
 Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD; distances in mm with
 the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD) on the input's grid too):
@@ -145,6 +147,10 @@ int run(std::vector<std::string> args) {
       molecule.field.probe = in.number();
       if (!(molecule.field.probe > 0)) throw Error("--probe must be positive (" + in.see_help() + ")");
       molecule_flags.push_back("--probe");
+    } else if (in.is("--min-radius")) {
+      molecule.channels.min_radius = in.number();
+      if (!(molecule.channels.min_radius >= 0)) throw Error("--min-radius must be 0 or more (" + in.see_help() + ")");
+      molecule_flags.push_back("--min-radius");
     } else if (in.is("--sections-only")) {
       molecule.channels.trace_unsectioned = false;
       molecule_flags.push_back("--sections-only");
