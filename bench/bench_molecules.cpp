@@ -2,7 +2,7 @@
 // (>= 100K atoms) at 0.5 Å. Each run is a fresh process (this program re-executed with --child), as the CLI
 // runs; per-stage medians over --runs and the largest peak RSS.
 //
-//   bench_molecules [--runs 3] [--data data] [--only gramicidin|maltoporin|lattice]
+//   bench_molecules [--runs 3] [--data data] [--only gramicidin|maltoporin|lattice] [--min-radius R]
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -24,6 +24,7 @@ using namespace chokeloops;
 namespace {
 
 const char* kStages[] = {"read", "levelset", "persistence", "surface", "channels", "loops", "check", "total"};
+const char* kMeasures[] = {"read", "levelset", "persistence", "surface", "channels", "loops", "check", "total", "cpu"};
 
 // Copies of a structure on a lattice, written as mmCIF-free PDB (serials wrap; chains renamed per copy).
 std::string make_lattice(const std::string& src, int copies, const std::string& out) {
@@ -52,10 +53,11 @@ std::string make_lattice(const std::string& src, int copies, const std::string& 
   return std::to_string(serial);
 }
 
-int child(const std::string& file, double voxel) {
+int child(const std::string& file, double voxel, double min_radius) {
   AnalyzeOptions ao;
   ao.levelset.voxel_size = voxel;
   MoleculeOptions mo;
+  if (min_radius >= 0) mo.channels.min_radius = min_radius;
   try {
     MoleculeAnalysis m = analyze_molecule(file, ao, mo);
     struct rusage ru;
@@ -65,6 +67,9 @@ int child(const std::string& file, double voxel) {
     std::printf("RESULT atoms %zu dims %dx%dx%d handles %d tunnels %d peak_mb %.0f", m.molecule.atoms.size(),
                 m.result.grid.dims[0], m.result.grid.dims[1], m.result.grid.dims[2], handles, tunnels, ru.ru_maxrss / 1024.0);
     for (const char* s : kStages) std::printf(" %s %.1f", s, m.result.timings_ms[s]);
+    // CPU time of all threads: on a shared machine the wall times above include waiting for a core
+    std::printf(" cpu %.1f", 1e3 * (double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                                    1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec)));
     std::printf("\n");
   } catch (const std::exception& e) {
     std::printf("ERROR %s\n", e.what());
@@ -77,13 +82,15 @@ int child(const std::string& file, double voxel) {
 
 int main(int argc, char** argv) {
   int runs = 3;
+  double min_radius = -1;  // the library's default unless given (0: trace every tunnel and handle, as before it)
   std::string data = CHOKELOOPS_SOURCE_DIR "/data", only;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
-    if (a == "--child" && i + 2 < argc) return child(argv[i + 1], std::atof(argv[i + 2]));
+    if (a == "--child" && i + 3 < argc) return child(argv[i + 1], std::atof(argv[i + 2]), std::atof(argv[i + 3]));
     if (a == "--runs" && i + 1 < argc) runs = std::atoi(argv[++i]);
     else if (a == "--data" && i + 1 < argc) data = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--min-radius" && i + 1 < argc) min_radius = std::atof(argv[++i]);
   }
   struct Case { std::string name, file; double voxel; };
   std::vector<Case> cases = {{"gramicidin", data + "/molecules/1grm_single_hole2.pdb", 0.25},
@@ -103,7 +110,7 @@ int main(int argc, char** argv) {
     for (int r = 0; r < runs; ++r) {
       char voxel[32];
       std::snprintf(voxel, sizeof voxel, "%g", c.voxel);
-      std::string cmd = "'" + self + "' --child '" + c.file + "' " + voxel;
+      std::string cmd = "'" + self + "' --child '" + c.file + "' " + voxel + " " + std::to_string(min_radius);
       FILE* p = popen(cmd.c_str(), "r");
       char buf[4096];
       std::string out;
@@ -120,7 +127,7 @@ int main(int argc, char** argv) {
       std::ostringstream head;
       while (in >> key >> value) {
         bool stage = false;
-        for (const char* s : kStages) stage |= key == s;
+        for (const char* s : kMeasures) stage |= key == s;
         if (stage) t[key].push_back(std::atof(value.c_str()));
         else if (key == "peak_mb") peak = std::max(peak, std::atof(value.c_str()));
         else head << key << " " << value << " ";
@@ -128,7 +135,7 @@ int main(int argc, char** argv) {
       info = head.str();
     }
     std::printf("%-11s voxel %.2f A  %s peak RSS %.0f MB\n  median of %d (ms):", c.name.c_str(), c.voxel, info.c_str(), peak, runs);
-    for (const char* s : kStages) {
+    for (const char* s : kMeasures) {
       auto v = t[s];
       std::sort(v.begin(), v.end());
       std::printf(" %s %.0f", s, v.empty() ? 0.0 : v[v.size() / 2]);

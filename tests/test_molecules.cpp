@@ -1,4 +1,4 @@
-// Molecules (issue 11): gramicidin A against HOLE's published bottleneck, analytic pores (a ring of atoms,
+// Molecules: gramicidin A against HOLE's published bottleneck, analytic pores (a ring of atoms,
 // a cylindrical hole through a slab of atoms), and the bad-input cases of the molecule reader.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -87,6 +87,33 @@ TEST(MoleculeAnalytic, RingOfAtoms) {
   EXPECT_NEAR(c->section_length, 2 * M_PI * 1.3, 0.15 * 2 * M_PI * 1.3);
 }
 
+// The same ring with a probe wider than its bottleneck: the bottleneck, axis and lining are still exact, the
+// profile and the section are not traced and the note says why.
+TEST(MoleculeAnalytic, RingNarrowerThanTheProbeGetsItsBottleneckAndANote) {
+  Molecule mol;
+  mol.path = "ring";
+  for (int i = 0; i < 8; ++i)
+    mol.atoms.push_back(atom(3 * std::cos(i * M_PI / 4), 3 * std::sin(i * M_PI / 4), 0, 1.7, i + 1));
+  MolecularFieldOptions fo;
+  fo.voxel_size = 0.1;
+  AnalyzeResult r = analyze_grid(molecular_field(mol, fo), AnalyzeOptions{});
+  std::vector<std::array<double, 3>> c;
+  std::vector<double> rad;
+  for (auto& a : mol.atoms) c.push_back(a.pos), rad.push_back(a.radius);
+  AtomLocator loc(c, rad);
+  ChannelOptions o;
+  o.min_radius = 1.5;
+  std::vector<Channel> ch = analyze_channels(r.grid, r.surface, loc, loc, r.chokes.chokes, o);
+  const Channel* w = widest(ch);
+  ASSERT_NE(w, nullptr);
+  EXPECT_NEAR(w->bottleneck_radius, 1.3, 1e-9);
+  EXPECT_EQ(w->bottleneck_lining.size(), 8u);
+  EXPECT_FALSE(w->traced);
+  EXPECT_TRUE(w->profile.empty());
+  EXPECT_TRUE(w->section.empty());
+  EXPECT_NE(w->note.find("narrower than --min-radius 1.5 A"), std::string::npos) << w->note;
+}
+
 // A slab of atoms (radius 1.5, square lattice 2 Å, three layers) with the atoms closer than 4 Å to the z axis
 // removed: the pore's bottleneck is on the axis in a layer, 4 - 1.5 = 2.5 Å.
 TEST(MoleculeAnalytic, CylindricalPoreThroughASlab) {
@@ -153,10 +180,19 @@ TEST(MoleculeGramicidin, BottleneckAsHoleOnTheAxisWithItsLoopInThePore) {
     farthest = std::max(farthest, (q - b).norm());
   }
   EXPECT_LT(farthest, c->bottleneck_radius + 2.0) << "the loop leaves the pore";
-  // every tunnel generator has a loop or says why not
-  for (auto& loop : m.result.loops)
+  // every tunnel generator has a loop or says why not; with the default --min-radius (0.9 A) the tunnels
+  // between atoms and the rings of atoms closed by contacts get that note
+  int narrow = 0, thin = 0;
+  for (auto& loop : m.result.loops) {
     if (loop.choke.side == Side::Tunnel && loop.choke.kind == Kind::Generator)
       EXPECT_TRUE(loop.found || !loop.note.empty());
+    narrow += loop.note.find("narrower than --min-radius 0.9 A") != std::string::npos;
+    thin += loop.note.find("thinner than --min-radius 0.9 A") != std::string::npos;
+  }
+  EXPECT_GT(narrow, 100);
+  EXPECT_GT(thin, 100);
+  for (auto& other : m.channels)
+    EXPECT_EQ(other.traced, other.bottleneck_radius >= 0.9) << other.bottleneck_radius;
 }
 
 TEST(MoleculeInput, ElementsFromAtomNamesWhenColumnsHoldDigits) {

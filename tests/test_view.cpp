@@ -320,3 +320,52 @@ TEST(ViewBrowser, PageWithoutLoopsDiagramOrThresholdsStillWorks) {
   auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
   EXPECT_EQ(j["shownLoops"], 0);
 }
+
+// A molecule run: loops.json carries each traced tunnel's radius profile (profiles.csv's rows), the page embeds
+// it, and selecting the tunnel draws it.
+TEST(ViewBrowser, MoleculePageDrawsTheSelectedTunnelsRadiusProfile) {
+  TempDir t;
+  fs::path out = t.path / "gramicidin";
+  auto a = run(std::string(CHOKELOOPS_CLI) + " analyze " + q(fs::path(CHOKELOOPS_DATA) / "molecules/1grm_single_hole2.pdb") +
+               " --radii amber --voxel-size 0.25 --quiet -o " + q(out));
+  ASSERT_EQ(a.code, 0) << a.out;
+  const nlohmann::json loops = page_data(slurp(out / "view.html"))["report"]["loops"];
+  int widest = -1;
+  double rb = 0;
+  nlohmann::json profile;
+  for (const auto& l : loops)
+    if (l.contains("channel") && l["channel"]["bottleneck_radius"].get<double>() > rb)
+      rb = l["channel"]["bottleneck_radius"], widest = l["id"], profile = l["channel"]["profile"];
+  ASSERT_GE(widest, 0);
+  EXPECT_NEAR(rb, 1.2, 0.15);  // gramicidin's pore
+  std::vector<std::pair<double, double>> csv;
+  {
+    std::ifstream in(out / "profiles.csv");
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string f[6];
+      for (auto& x : f) std::getline(ls, x, ',');
+      if (std::stoi(f[0]) == widest) csv.push_back({std::stod(f[1]), std::stod(f[5])});
+    }
+  }
+  ASSERT_GT(csv.size(), 10u);
+  ASSERT_EQ(profile["s"].size(), csv.size());
+  ASSERT_EQ(profile["radius"].size(), csv.size());
+  std::size_t at_bottleneck = 0;
+  for (std::size_t k = 0; k < csv.size(); ++k) {
+    EXPECT_NEAR(profile["s"][k].get<double>(), csv[k].first, 1e-3);
+    EXPECT_NEAR(profile["radius"][k].get<double>(), csv[k].second, 1e-4);
+    if (std::abs(csv[k].first) < std::abs(csv[at_bottleneck].first)) at_bottleneck = k;
+  }
+  EXPECT_EQ(csv[at_bottleneck].first, 0.0);  // s = 0 at the bottleneck, with its exact radius
+  EXPECT_NEAR(profile["radius"][at_bottleneck].get<double>(), rb, 1e-4);
+
+  REQUIRE_BROWSER();
+  auto r = run("node " + q(kViewer / "tests/check-profile.mjs") + " " + q(out) + " " + std::to_string(widest));
+  EXPECT_EQ(r.code, 0) << r.out;
+  auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(j["plotLoop"], widest);
+  EXPECT_EQ(j["plotPoints"].get<std::size_t>(), csv.size());
+}

@@ -48,11 +48,16 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
                             all otherwise); the rest are counted
 Molecules (tunnels.csv, profiles.csv, lining.csv, channels.pdb, view.pml are written too):
   --model N                 model number (default 1)
-  --chains A,B              keep only these chains (default all)
+  --chains A,B              keep only these chains (default all; with --assembly, the file's chains,
+                            every copy kept)
+  --assembly ID|none        build biological assembly ID from the file's REMARK 350 / _pdbx_struct_assembly
+                            (copies of chain C named C1, C2, ...); default none: the coordinates as stored
   --ignore RES,...          residue names to drop (default waters and common ions; "" keeps all)
   --radii bondi|amber       van der Waals radii: Bondi 1964 (default) or HOLE's simple.rad (amber)
   --surface vdw|sas|ses     van der Waals, solvent-accessible or solvent-excluded surface (default vdw)
   --probe R                 probe radius for sas/ses, Å (default 1.4)
+  --min-radius R            tunnels with a bottleneck narrower than R Å get the bottleneck and a note, no
+                            profile or loop (default 0.9, CAVER's probe; 0 traces all)
   --sections-only           tunnels without a cross-section loop get a note, not a membrane loop (fast)
 Volumes (positions in the image's world mm, RAS for NIfTI, the file's space for NRRD, LPS for MetaImage;
 distances in mm with the image's own spacing; writes loops.nii.gz / membranes.nii.gz (.nrrd for NRRD, .mha
@@ -126,6 +131,7 @@ int run(std::vector<std::string> args) {
     else if (in.is("-o", "--output")) outdir = in.value();
     else if (in.is("--model")) molecule.read.model = int(in.integer(1, 1000000)), molecule_flags.push_back("--model");
     else if (in.is("--chains")) molecule.read.chains = split_list(in.value()), molecule_flags.push_back("--chains");
+    else if (in.is("--assembly")) molecule.read.assembly = in.value(), molecule_flags.push_back("--assembly");
     else if (in.is("--ignore")) {
       molecule.read.ignore = split_list(in.value());
       molecule.read.ignore_set = true;
@@ -144,6 +150,10 @@ int run(std::vector<std::string> args) {
       molecule.field.probe = in.number();
       if (!(molecule.field.probe > 0)) throw Error("--probe must be positive (" + in.see_help() + ")");
       molecule_flags.push_back("--probe");
+    } else if (in.is("--min-radius")) {
+      molecule.channels.min_radius = in.number();
+      if (!(molecule.channels.min_radius >= 0)) throw Error("--min-radius must be 0 or more (" + in.see_help() + ")");
+      molecule_flags.push_back("--min-radius");
     } else if (in.is("--sections-only")) {
       molecule.channels.trace_unsectioned = false;
       molecule_flags.push_back("--sections-only");

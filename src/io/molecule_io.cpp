@@ -15,6 +15,7 @@
 #include <set>
 #include <sstream>
 
+#include <gemmi/assembly.hpp>
 #include <gemmi/cif.hpp>
 #include <gemmi/mmcif.hpp>
 #include <gemmi/pdb.hpp>
@@ -269,6 +270,56 @@ void check_pdb_record_starts(const std::string& text, const std::string& path) {
   }
 }
 
+std::string assembly_ids(const gemmi::Structure& st) {
+  std::string ids;
+  for (const gemmi::Assembly& a : st.assemblies) ids += (ids.empty() ? "" : ", ") + a.name;
+  return ids;
+}
+
+int operator_total(const gemmi::Assembly& a) {
+  int n = 0;
+  for (const gemmi::Assembly::Gen& g : a.generators) n += int(g.operators.size());
+  return n;
+}
+
+// Builds the assembly with gemmi (its operators, chain naming and merging of copies that coincide, e.g. ions
+// on a symmetry axis). --chains names the file's chains and is applied first, so every copy of them stays.
+void build_assembly(gemmi::Structure& st, const MoleculeReadOptions& options, const std::string& path, Molecule& mol) {
+  const gemmi::Assembly* a = st.find_assembly(options.assembly);
+  if (!a) {
+    if (st.assemblies.empty())
+      fail(path, "--assembly " + options.assembly +
+                     ": the file lists no biological assembly (no REMARK 350 BIOMT or _pdbx_struct_assembly)");
+    fail(path, "has no biological assembly '" + options.assembly + "' (it lists: " + assembly_ids(st) + ")");
+  }
+  mol.assembly = a->name;
+  mol.assembly_operators = operator_total(*a);
+  if (!options.chains.empty()) {
+    const std::set<std::string> keep(options.chains.begin(), options.chains.end());
+    for (gemmi::Model& model : st.models)
+      for (std::size_t c = model.chains.size(); c-- > 0;)
+        if (!keep.count(model.chains[c].name)) {
+          for (const gemmi::Residue& res : model.chains[c].residues) mol.ignored_atoms += int(res.atoms.size());
+          model.chains.erase(model.chains.begin() + long(c));
+        }
+  }
+  gemmi::transform_to_assembly(st, a->name, gemmi::HowToNameCopiedChain::AddNumber, nullptr);
+}
+
+// A file whose first assembly moves atoms (a crystal's asymmetric unit of an oligomer) analysed as stored
+// lacks the pores between its copies; the user is told how to build it.
+std::string assembly_hint(const gemmi::Structure& st) {
+  if (st.assemblies.empty()) return {};
+  const gemmi::Assembly& a = st.assemblies.front();
+  bool moves = false;
+  for (const gemmi::Assembly::Gen& g : a.generators)
+    for (const gemmi::Assembly::Operator& op : g.operators) moves = moves || !op.transform.is_identity();
+  if (!moves) return {};
+  return "analysed as stored; the file's biological assembly " + a.name + " applies " +
+         std::to_string(operator_total(a)) + " operators to its chains (--assembly " + a.name +
+         " builds it; pores between copies exist only there)";
+}
+
 struct Radius {
   const char* element;
   double r;
@@ -344,6 +395,19 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
   Molecule mol;
   mol.path = path;
   mol.model = options.model;
+  const bool assembly = !options.assembly.empty() && options.assembly != "none";
+  if (assembly) {
+    try {
+      build_assembly(st, options, path, mol);
+    } catch (const Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      std::string m = e.what();
+      fail(path, "cannot build assembly " + options.assembly + " (" + m.substr(0, m.find('\n')) + ")");
+    }
+  } else if (std::string hint = assembly_hint(st); !hint.empty()) {
+    mol.warnings.push_back(path + ": " + hint);
+  }
   if (st.models.empty()) fail(path, "no atoms (not a PDB/mmCIF coordinate file?)");
   const gemmi::Model* model = nullptr;
   for (auto& m : st.models)
@@ -362,7 +426,7 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
       for (std::size_t ai = 0; ai < res.atoms.size(); ++ai) {
         const gemmi::Atom& a = res.atoms[ai];
         ++total;
-        if (!chains.empty() && !chains.count(ch.name)) continue;
+        if (!assembly && !chains.empty() && !chains.count(ch.name)) continue;
         if (ignored.count(res.name)) continue;
         if (a.altloc) {  // keep the highest occupancy of the atoms of this name (the first on a tie)
           bool best = true;
@@ -396,10 +460,10 @@ Molecule read_molecule(const std::string& path, const MoleculeReadOptions& optio
       }
     }
   }
-  mol.ignored_atoms = total - int(mol.atoms.size());
+  mol.ignored_atoms += total - int(mol.atoms.size());
   if (mol.atoms.empty()) {
-    if (total == 0) fail(path, "no atoms (not a PDB/mmCIF coordinate file?)");
-    fail(path, "no atoms left after the filters (" + std::to_string(total) +
+    if (mol.ignored_atoms == 0) fail(path, "no atoms (not a PDB/mmCIF coordinate file?)");
+    fail(path, "no atoms left after the filters (" + std::to_string(mol.ignored_atoms) +
                    " atoms dropped by --chains/--ignore/altlocs)");
   }
   if (int n = digit_elements)

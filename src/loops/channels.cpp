@@ -457,6 +457,14 @@ Polyline3 best_section(const SurfaceMesh& surface, const FaceCells& cells, const
 }
 }  // namespace
 
+namespace {
+std::string narrower_note(double min_radius) {
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "narrower than --min-radius %g A: no probe passes; not traced", min_radius);
+  return buf;
+}
+}  // namespace
+
 std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh& surface, const AtomLocator& locator,
                                       const AtomLocator& vdw, const std::vector<Choke>& chokes, const ChannelOptions& o) {
   std::vector<int> tunnel;
@@ -480,6 +488,14 @@ std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh&
     }
     const V3 p = v3(ch.bottleneck), n = v3(ch.axis).normalized();
     const double rb = ch.bottleneck_radius;
+    if (rb < o.min_radius) {
+      std::map<int, double> at_bottleneck;
+      lining_at(vdw, p, vdw.distance(arr(p)), o.lining_margin, at_bottleneck);
+      ch.bottleneck_lining = sorted_lining(at_bottleneck);
+      ch.traced = false;
+      ch.note = narrower_note(o.min_radius) + (ch.note.empty() ? "" : "; " + ch.note);
+      return;
+    }
     const double floor_value = std::min(0.5 * ch.grid_radius, 0.5 * rb);
     const double bulk = std::max(o.bulk_radius, 1.5 * rb);
     const double disc = rb + 4.0;

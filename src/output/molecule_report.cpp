@@ -1,4 +1,5 @@
 // Molecule outputs beside the usual report: what HOLE/CAVER users load (CSV tables, .sph-style PDB, PyMOL).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -92,8 +93,10 @@ void write_molecule_report(const MoleculeAnalysis& m, const MoleculeOptions& opt
   {
     auto out = open_out(outdir + "/view.pml");
     std::string structure = std::filesystem::absolute(mol.path).string();
-    out << "# PyMOL: pymol " << outdir << "/view.pml\n"
-        << "load " << structure << ", structure\n"
+    out << "# PyMOL: pymol " << outdir << "/view.pml\n";
+    // PyMOL builds assemblies of mmCIF files only; for a PDB file the paths overlay its first copy
+    if (!mol.assembly.empty()) out << "set assembly, " << mol.assembly << "\n";
+    out << "load " << structure << ", structure\n"
         << "hide everything, structure\nshow sticks, structure\nshow surface, structure\nset transparency, 0.6\n"
         << "load " << std::filesystem::absolute(outdir + "/channels.pdb").string() << ", paths\n"
         << "alter paths, vdw=b\nrebuild\nshow spheres, paths\nspectrum b, red_yellow_blue, paths\n"
@@ -125,6 +128,8 @@ void write_molecule_report(const MoleculeAnalysis& m, const MoleculeOptions& opt
   j["molecule"] = {{"atoms", mol.atoms.size()},
                    {"ignored_atoms", mol.ignored_atoms},
                    {"model", mol.model},
+                   {"assembly", mol.assembly.empty() ? "none" : mol.assembly},
+                   {"assembly_operators", mol.assembly_operators},
                    {"surface", to_string(options.field.surface)},
                    {"probe", options.field.probe},
                    {"radii", options.read.radii == RadiusSet::Amber ? "amber" : "bondi"}};
@@ -134,11 +139,14 @@ void write_molecule_report(const MoleculeAnalysis& m, const MoleculeOptions& opt
       const MolAtom& a = mol.atoms[std::size_t(l.atom)];
       lin.push_back({{"chain", a.chain}, {"resname", a.resname}, {"resseq", a.resseq}, {"atom", a.name}, {"distance", l.distance}});
     }
+    // the radius profile for plots (view.html): arc length from the bottleneck and radius, as profiles.csv
+    nlohmann::json s = nlohmann::json::array(), radius = nlohmann::json::array();
+    for (auto& p : c.profile) s.push_back(std::round(p.s * 1000) / 1000), radius.push_back(std::round(p.radius * 1e4) / 1e4);
     j["loops"][std::size_t(c.loop)]["channel"] = {
         {"bottleneck_radius", c.bottleneck_radius}, {"grid_radius", c.grid_radius}, {"refined", c.refined},
         {"bottleneck", {c.bottleneck[0], c.bottleneck[1], c.bottleneck[2]}}, {"axis", {c.axis[0], c.axis[1], c.axis[2]}},
         {"length", c.length}, {"open_ends", int(c.open[0]) + int(c.open[1])}, {"section_length", c.section_length},
-        {"bottleneck_lining", lin}, {"note", c.note}};
+        {"bottleneck_lining", lin}, {"profile", {{"s", s}, {"radius", radius}}}, {"note", c.note}};
   }
   std::ofstream out(jpath);
   out << j.dump(1) << "\n";

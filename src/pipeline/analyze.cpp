@@ -238,9 +238,10 @@ void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& top
   }
 }
 
-void warn_about_missing_loops(const std::vector<Loop>& loops, std::vector<std::string>& warnings) {
+void warn_about_missing_loops(const std::vector<Loop>& loops, std::vector<std::string>& warnings,
+                              const std::vector<bool>* by_design) {
   int missing = 0;
-  for (auto& l : loops) missing += !l.found;
+  for (std::size_t i = 0; i < loops.size(); ++i) missing += !loops[i].found && !(by_design && (*by_design)[i]);
   if (missing)
     warnings.push_back(std::to_string(missing) + " choke(s) have no loop (see each loop's note); they are listed with empty points");
 }

@@ -2,9 +2,13 @@
 // exact bottlenecks (the surface's cross-section there, cheap and inside the pore) and only the chokes
 // without one, and the handles, grow membranes: on a bumpy molecular surface a membrane loop of a channel
 // can run far from the pore (gramicidin: 35.7 Å against a lumen of ~7.5 Å) and costs most of the run.
+// Tunnels narrower than the probe (--min-radius) and handles shallower than it are gaps and contacts between
+// atoms: they keep their bottleneck or depth and a note, and are not traced.
 #include "chokeloops/analyze_molecule.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 #include "loop_checks.h"
 
@@ -64,8 +68,14 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.loops.assign(r.chokes.chokes.size(), Loop{});
   std::vector<bool> done(r.chokes.chokes.size(), false);
   for (const Channel& c : m.channels) {
-    if (c.section.empty()) continue;
     const Choke& choke = r.chokes.chokes[std::size_t(c.loop)];
+    if (!c.traced) {  // narrower than the probe: a bottleneck and a note, no loop
+      r.loops[std::size_t(c.loop)].choke = choke;
+      r.loops[std::size_t(c.loop)].note = c.note;
+      done[std::size_t(c.loop)] = true;
+      continue;
+    }
+    if (c.section.empty()) continue;
     Loop l = section_loop(choke, c.section, r.surface, adjacency);
     // a generator's loop must be non-contractible; a cross-section that is not falls back to the membrane
     if (choke.kind == Kind::Generator && (l.edge_path.empty() || !topology || topology->contractible_fast(l.edge_path)))
@@ -73,6 +83,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
     r.loops[std::size_t(c.loop)] = std::move(l);
     done[std::size_t(c.loop)] = true;
   }
+  std::vector<bool> narrow_handle(r.chokes.chokes.size(), false);
   std::vector<Choke> rest;
   std::vector<std::size_t> rest_index;
   for (std::size_t i = 0; i < r.chokes.chokes.size(); ++i) {
@@ -83,6 +94,18 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
       done[i] = true;
       continue;
     }
+    // A handle of a vdW surface is a ring of atoms closed where two of them barely overlap: its depth is that
+    // contact's neck. Below the probe radius it is a contact, not a wall around a channel, and its membrane
+    // costs most of the run (gramicidin: every handle is under 0.31 A deep).
+    if (r.chokes.chokes[i].side == Side::Handle && r.chokes.chokes[i].depth < options.channels.min_radius) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "ring of atoms closed by a contact %.3f A deep, thinner than --min-radius %g A: "
+                    "not traced", r.chokes.chokes[i].depth, options.channels.min_radius);
+      r.loops[i].choke = r.chokes.chokes[i];
+      r.loops[i].note = buf;
+      done[i] = narrow_handle[i] = true;
+      continue;
+    }
     rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
   }
   std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology);
@@ -91,7 +114,29 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   t = Clock::now();
   if (topology && analyze.check_generators) drop_contractible_generators(r.loops, *topology, &done);
   r.timings_ms["check"] = ms(t);
-  warn_about_missing_loops(r.loops, r.warnings);
+  std::vector<bool> narrow = narrow_handle;
+  int n_narrow = 0, n_handles = 0, n_thin = int(std::count(narrow_handle.begin(), narrow_handle.end(), true));
+  for (const Channel& c : m.channels)
+    if (!c.traced) narrow[std::size_t(c.loop)] = true, ++n_narrow;
+  for (const Choke& c : r.chokes.chokes) n_handles += c.side == Side::Handle;
+  warn_about_missing_loops(r.loops, r.warnings, &narrow);
+  if (n_narrow || n_thin) {
+    char buf[400];
+    std::string what;
+    if (n_narrow) {
+      std::snprintf(buf, sizeof buf, "%d of %zu tunnels are narrower (bottleneck and lining reported, no profile or "
+                    "loop)", n_narrow, m.channels.size());
+      what = buf;
+    }
+    if (n_thin) {
+      std::snprintf(buf, sizeof buf, "%d of %d handles are rings of atoms closed by thinner contacts (not traced)",
+                    n_thin, n_handles);
+      what += (what.empty() ? "" : "; ") + std::string(buf);
+    }
+    std::snprintf(buf, sizeof buf, "--min-radius %g A: %s; --min-radius 0 traces all", options.channels.min_radius,
+                  what.c_str());
+    r.warnings.push_back(buf);
+  }
   r.warnings.insert(r.warnings.begin(), m.molecule.warnings.begin(), m.molecule.warnings.end());
   stage("done", 1);
   r.timings_ms["total"] = ms(t0);

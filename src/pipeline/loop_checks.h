@@ -32,7 +32,9 @@ LoopContext prepare_loops(const AnalyzeResult& r);
 void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& topology,
                                   const std::vector<bool>* skip = nullptr);
 
-// One warning line counting the chokes that got no loop (each loop's note says why).
-void warn_about_missing_loops(const std::vector<Loop>& loops, std::vector<std::string>& warnings);
+// One warning line counting the chokes that got no loop (each loop's note says why); those with `by_design[i]`
+// set (when given) were left without one on purpose and are not counted.
+void warn_about_missing_loops(const std::vector<Loop>& loops, std::vector<std::string>& warnings,
+                              const std::vector<bool>* by_design = nullptr);
 
 }  // namespace chokeloops

@@ -16,7 +16,7 @@ const HIDDEN = 0.55;  // opacity of the parts of loops behind the surface
 
 const state = {
   ready: false, webgl: false, rendered: false, renderMode: false,
-  loopCount: 0, selectedLoop: null, surfaceOpacity: 1,
+  loopCount: 0, selectedLoop: null, profileLoop: null, surfaceOpacity: 1,
   displayFaces: 0, sourceFaces: 0, decimated: false,
   sort: { key: 'persistence', dir: 'desc' }, errors: [],
 };
@@ -551,6 +551,41 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   fillRows();
   panel.append(loops.length ? $('div', { class: 'table-wrap' }, table) : $('div', { class: 'muted', 'data-testid': 'no-loops', text: 'No loops passed the thresholds.' }));
 
+  // Radius profiles of molecular channels (loops.json's channel.profile), drawn for the selected tunnel.
+  const profiled = loops.filter((l) => l.channel);
+  let profileBox = null;
+  if (profiled.length) {
+    panel.append($('h2', { text: 'Channel profile' }));
+    profileBox = $('div', { class: 'diagram', 'data-testid': 'profile-panel' });
+    panel.append(profileBox);
+  }
+  const showProfile = (id) => {
+    if (!profileBox) return;
+    const l = loops.find((x) => x.id === id);
+    state.profileLoop = null;
+    if (!l || !l.channel) {
+      profileBox.replaceChildren($('div', { class: 'muted', text: 'Select a tunnel to see its radius profile.' }));
+      return;
+    }
+    const c = l.channel, p = c.profile || {};
+    const s = Array.isArray(p.s) ? p.s : [], r = Array.isArray(p.radius) ? p.radius : [];
+    const pts = s.map((x, k) => [x, r[k]]).filter((q) => Number.isFinite(q[0]) && Number.isFinite(q[1]));
+    const head = $('div', { text: `tunnel ${l.id}: bottleneck ${fmt(c.bottleneck_radius)} Å` +
+      (Number.isFinite(c.length) && c.length > 0 ? `, path ${fmt(c.length)} Å` : '') });
+    const lining = Array.isArray(c.bottleneck_lining) ? c.bottleneck_lining.slice(0, 6)
+      .map((a) => `${a.chain}:${a.resname}${a.resseq}`).filter((v, k, all) => all.indexOf(v) === k) : [];
+    const rest = [head];
+    if (lining.length) rest.push($('div', { class: 'muted', text: `lined by ${lining.join(', ')}` }));
+    if (pts.length < 2) {
+      rest.push($('div', { class: 'note', 'data-testid': 'profile-note', text: c.note || 'no profile was traced for this tunnel' }));
+      profileBox.replaceChildren(...rest);
+      return;
+    }
+    state.profileLoop = l.id;
+    profileBox.replaceChildren(...rest, drawProfile(l.id, pts, c.bottleneck_radius));
+  };
+  showProfile(null);
+
   // Persistence diagrams.
   panel.append($('h2', { text: 'Persistence diagrams' }));
   const diag = report.diagram || {};
@@ -574,6 +609,7 @@ function buildPanel(panel, report, mesh, loops, viewer) {
         if (on && !state.renderMode) tr.scrollIntoView({ block: 'nearest' });
       }
       for (const [lid, els] of points) for (const el of els) el.classList.toggle('selected', lid === id);
+      showProfile(id);
     },
   };
 }
@@ -585,6 +621,41 @@ function niceTicks(max) {
   const out = [];
   for (let k = 0; k * s <= max * (1 + 1e-9) && out.length < 12; k++) out.push(Number((k * s).toPrecision(6)));
   return out;
+}
+
+// Radius against signed distance along the channel (0 at the bottleneck), as HOLE plots it.
+function drawProfile(id, pts, bottleneck) {
+  const W = 400, H = 220, ml = 46, mr = 12, mt = 14, mb = 34;
+  const s0 = Math.min(...pts.map((q) => q[0])), s1 = Math.max(...pts.map((q) => q[0]));
+  const rMax = (Math.max(...pts.map((q) => q[1])) || 1) * 1.08;
+  const span = s1 - s0 || 1;
+  const X = (x) => ml + ((x - s0) / span) * (W - ml - mr), Y = (y) => H - mb - (y / rMax) * (H - mt - mb);
+  const root = svg('svg', { viewBox: `0 0 ${W} ${H}`, 'data-testid': 'profile-plot', 'data-loop-id': String(id),
+    'data-points': String(pts.length), role: 'img', 'aria-label': `radius profile of tunnel ${id}` });
+  root.append(svg('line', { x1: ml, y1: Y(0), x2: W - mr, y2: Y(0), stroke: '#444' }));
+  root.append(svg('line', { x1: ml, y1: Y(0), x2: ml, y2: Y(rMax), stroke: '#444' }));
+  const step = niceTicks(span)[1] || span;
+  for (let xv = Math.ceil(s0 / step) * step; xv <= s1 + 1e-9; xv += step) {
+    const tx = svg('text', { x: X(xv), y: Y(0) + 13, 'font-size': 9.5, 'text-anchor': 'middle', fill: '#555' }); tx.textContent = fmt(Number(xv.toPrecision(6)));
+    root.append(svg('line', { x1: X(xv), y1: Y(0), x2: X(xv), y2: Y(0) + 3, stroke: '#444' }), tx);
+  }
+  for (const yv of niceTicks(rMax)) {
+    const ty = svg('text', { x: ml - 4, y: Y(yv) + 3, 'font-size': 9.5, 'text-anchor': 'end', fill: '#555' }); ty.textContent = fmt(yv);
+    root.append(svg('line', { x1: ml - 3, y1: Y(yv), x2: ml, y2: Y(yv), stroke: '#444' }), ty);
+  }
+  const xl = svg('text', { x: (ml + W - mr) / 2, y: H - 6, 'font-size': 11, 'text-anchor': 'middle' });
+  xl.textContent = 'distance along the channel from the bottleneck (Å)';
+  const yl = svg('text', { x: 12, y: (Y(0) + Y(rMax)) / 2, 'font-size': 11, 'text-anchor': 'middle', transform: `rotate(-90 12 ${(Y(0) + Y(rMax)) / 2})` });
+  yl.textContent = 'radius (Å)';
+  root.append(xl, yl);
+  if (Number.isFinite(bottleneck)) {
+    root.append(svg('line', { x1: ml, y1: Y(bottleneck), x2: W - mr, y2: Y(bottleneck), stroke: '#b03030', 'stroke-dasharray': '5 3' }));
+  }
+  root.append(svg('polyline', { points: pts.map((q) => `${X(q[0]).toFixed(1)},${Y(q[1]).toFixed(1)}`).join(' '),
+    fill: 'none', stroke: COLORS['tunnel generator'], 'stroke-width': 2, 'data-testid': 'profile-line' }));
+  if (s0 <= 0 && s1 >= 0 && Number.isFinite(bottleneck))
+    root.append(svg('circle', { cx: X(0), cy: Y(bottleneck), r: 3.5, fill: '#b03030', 'data-testid': 'profile-bottleneck' }));
+  return root;
 }
 
 function drawDiagram(side, cand, loops, dmax, pmin, points) {

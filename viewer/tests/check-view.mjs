@@ -5,7 +5,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
-import { chromium } from 'playwright-core';
+import { loadView, runPage } from './browser.mjs';
 import { PNG } from 'pngjs';
 
 const args = process.argv.slice(2);
@@ -35,23 +35,9 @@ function pixelStats(buf) {
   return { width, height, variance: Math.round(s2 / n - m * m), colours: colours.size };
 }
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHOKELOOPS_CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  args: ['--no-sandbox', '--disable-gpu', '--no-first-run', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--disable-quic', '--disable-dev-shm-usage', '--enable-unsafe-swiftshader'],
-});
-try {
-  const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, deviceScaleFactor: 1 });
-  const requests = [];
-  context.on('request', (r) => { if (!r.url().startsWith('file:') && !r.url().startsWith('data:')) requests.push(r.url()); });
-  const page = await context.newPage();
-  const errors = [];
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(`console: ${m.text()}`); });
-  page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
+await runPage(result, failures, check, async ({ context, page, errors }) => {
   const t0 = Date.now();
-  await page.goto(url, { waitUntil: 'load', timeout: 120000 });
-  await page.waitForFunction(() => window.chokeloopsView && (window.chokeloopsView.ready || window.chokeloopsView.errors.length), null, { timeout: 120000 });
+  await loadView(page, url);
   result.loadMs = Date.now() - t0;
   const st = await page.evaluate(() => {
     const s = window.chokeloopsView;
@@ -191,16 +177,4 @@ try {
     check(lsel === id, `#loop=${id} selected ${lsel}`);
   }
 
-  result.errors = errors;
-  result.externalRequests = requests;
-  check(errors.length === 0, `console errors: ${errors.join(' | ')}`);
-  check(requests.length === 0, `the page requested: ${requests.join(', ')}`);
-} catch (e) {
-  failures.push(`exception: ${e && e.stack || e}`);
-} finally {
-  await browser.close();
-}
-result.failures = failures;
-result.ok = failures.length === 0;
-console.log(JSON.stringify(result, null, 1));
-process.exit(result.ok ? 0 : 1);
+});

@@ -31,6 +31,10 @@ struct ChannelOptions {
   bool trace_unsectioned = true;  // tunnel chokes without a valid cross-section get membrane loops (slow on
                                   // big proteins: thousands of generators); false: a note instead
   bool section_loops = true;      // tunnel loops are the surface's cross-section at the bottleneck where one is found
+  // Å: a tunnel whose bottleneck is narrower keeps its bottleneck, axis and lining there but gets no profile
+  // and no loop, only a note (as CAVER's probe radius: no probe passes such a constriction; 0 traces all).
+  // analyze_molecule leaves the handles shallower than it untraced too (rings of atoms closed by a contact).
+  double min_radius = 0.9;
 };
 
 struct ProfilePoint {
@@ -59,6 +63,7 @@ struct Channel {
   std::vector<LiningAtom> bottleneck_lining;  // at the bottleneck, by distance
   Polyline3 section;               // the surface's cross-section around the bottleneck (empty: none found)
   double section_length = 0;
+  bool traced = true;              // false: narrower than ChannelOptions::min_radius (no profile, no loop)
   std::string note;
 };
 
