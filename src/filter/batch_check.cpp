@@ -96,16 +96,15 @@ SideLabels label_sides(const ScalarGrid& grid) {
   });
   const std::int32_t next_inside = roots[std::size_t(slabs)][0];
   out.outside_reaches_border.assign(std::size_t(roots[std::size_t(slabs)][1]), 0);
+  // The border: whole rows on the box's outer planes, the two ends of every other row.
   for (int k = 0; k < d[2]; ++k)
-    for (int j = 0; j < d[1]; ++j)
-      for (int i = 0; i < d[0]; ++i) {
-        if (!(i == 0 || j == 0 || k == 0 || i == d[0] - 1 || j == d[1] - 1 || k == d[2] - 1)) {
-          if (k > 0 && k < d[2] - 1 && j > 0 && j < d[1] - 1) i = d[0] - 2;  // the row's last vertex is next
-          continue;
-        }
+    for (int j = 0; j < d[1]; ++j) {
+      const bool whole_row = k == 0 || j == 0 || k == d[2] - 1 || j == d[1] - 1;
+      for (int i = 0; i < d[0]; i += whole_row ? 1 : d[0] - 1) {
         const Id v = cx.vertex(i, j, k);
         if (!inside(v)) out.outside_reaches_border[std::size_t(out.label[std::size_t(v)])] = 1;
       }
+    }
   out.inside_components = next_inside;
   for (char b : out.outside_reaches_border) out.cavities += b ? 0 : 1;
   return out;
@@ -125,11 +124,9 @@ GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, c
     if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
   };
   const auto& link = freudenthal::vertex_link();
-  const auto& d = grid.dims;
   for (Id v : group) {
     const auto c = cx.coords(v);
-    verdict.on_border = verdict.on_border || c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == d[0] - 1 ||
-                        c[1] == d[1] - 1 || c[2] == d[2] - 1;
+    verdict.on_border = verdict.on_border || !cx.inside(c[0] - 1, c[1] - 1, c[2] - 1) || !cx.inside(c[0] + 1, c[1] + 1, c[2] + 1);
     std::array<Id, 14> nb;
     for (int k = 0; k < 14; ++k) nb[std::size_t(k)] = cx.neighbor_inside(c, k) ? v + cx.neighbor_delta(k) : -1;
     auto look = [&](Id u) {
