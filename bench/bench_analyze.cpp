@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/analyze.h"
 #include "chokeloops/io/vdb_io.h"
@@ -52,6 +53,7 @@ static void run_model(const Model& m, int runs, int resolution) {
 }
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 5, resolution = 256;
   std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/data", only;
   for (int i = 1; i < argc; ++i) {

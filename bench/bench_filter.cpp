@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "analyze_child.h"
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/filter/filter_file.h"
 
@@ -113,6 +114,7 @@ Figures in_child(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 3;
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {

@@ -12,11 +12,13 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/field/levelset.h"
 
 using namespace chokeloops;
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   const int runs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3;
   const int res = argc > 2 ? std::atoi(argv[2]) : 256;
   std::vector<std::string> files;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "analyze_child.h"
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/output/mesh_write.h"
 #include "chokeloops/surface/surface.h"
@@ -75,6 +76,7 @@ void run_model(const Model& m, int runs, int threads) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 3, threads = 0;
   std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/data", only;
   for (int i = 1; i < argc; ++i) {

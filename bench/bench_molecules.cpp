@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/analyze_molecule.h"
 
 using namespace chokeloops;
@@ -81,6 +82,7 @@ int child(const std::string& file, double voxel, double min_radius) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 3;
   double min_radius = -1;  // the library's default unless given (0: trace every tunnel and handle, as before it)
   std::string data = CHOKELOOPS_SOURCE_DIR "/data", only;

@@ -29,6 +29,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/topology/persistence.h"
 #include "../tests/phat_oracle.h"
@@ -184,6 +185,7 @@ std::vector<std::string> split(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 5, threads = 0, peer_max = 0;
   bool large = false;
   std::vector<int> sizes{128, 256};

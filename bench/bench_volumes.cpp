@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/analyze_volume.h"
 
 using namespace chokeloops;
@@ -143,6 +144,7 @@ void run_case(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--max-loops" && i + 1 < argc) g_max_loops = std::atoi(argv[++i]);

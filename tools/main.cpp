@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "chokeloops/grid.h"
+#include "chokeloops/huge_pages.h"
 #include "command.h"
 
 namespace chokeloops::cli {
@@ -24,6 +25,7 @@ static void usage(std::ostream& out) {
 }
 
 int main(int argc, char** argv) {
+  restart_with_huge_pages(argv);
   if (argc < 2) { usage(std::cerr); return 2; }
   std::string name = argv[1];
   if (name == "--help" || name == "-h" || name == "help") { usage(std::cout); return 0; }
