@@ -1,5 +1,8 @@
 #include "chokeloops/surface/mesh_adjacency.h"
 
+#include "halfedge_groups.h"
+
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -68,19 +71,41 @@ void build_vertex_cells(const SurfaceMesh& mesh, MeshAdjacency& A) {
 }
 }  // namespace
 
+std::vector<EdgeHalfedge> halfedges_by_edge(const SurfaceMesh& mesh) {
+  const std::size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
+  auto key_of = [&](std::size_t h) {
+    const auto& t = mesh.faces[h / 3];
+    const int a = t[h % 3], b = t[(h + 1) % 3];
+    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
+  };
+  std::vector<int> start(nv + 1, 0);
+  for (std::size_t h = 0; h < 3 * nf; ++h) ++start[(key_of(h) >> 32) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<EdgeHalfedge> he(3 * nf);
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t h = 0; h < 3 * nf; ++h) {
+      const std::uint64_t key = key_of(h);
+      he[std::size_t(fill[key >> 32]++)] = {key, int(h)};
+    }
+  }
+  // Each bucket holds a vertex's few edges in rising h: a stable insertion sort by key finishes the order.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v < r.end(); ++v)
+      for (int i = start[v] + 1; i < start[v + 1]; ++i) {
+        const EdgeHalfedge x = he[std::size_t(i)];
+        int j = i;
+        for (; j > start[v] && he[std::size_t(j - 1)].key > x.key; --j) he[std::size_t(j)] = he[std::size_t(j - 1)];
+        he[std::size_t(j)] = x;
+      }
+  });
+  return he;
+}
+
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
   MeshAdjacency A;
   const size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
-  struct HE { std::uint64_t key; int h; };
-  std::vector<HE> he(3 * nf);
-  tbb::parallel_for(size_t(0), nf, [&](size_t f) {
-    for (int k = 0; k < 3; ++k) {
-      int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
-      he[3 * f + k] = {(std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)),
-                       int(3 * f + k)};
-    }
-  });
-  tbb::parallel_sort(he.begin(), he.end(), [](const HE& x, const HE& y) { return x.key < y.key || (x.key == y.key && x.h < y.h); });
+  const std::vector<EdgeHalfedge> he = halfedges_by_edge(mesh);
   A.twin.assign(3 * nf, -1);
   A.vv_start.assign(nv + 1, 0);
   size_t nedges = 0;

@@ -1,5 +1,7 @@
 #include "chokeloops/surface/surface.h"
 
+#include "halfedge_groups.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -261,20 +263,17 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   SurfaceStats s;
   s.vertices = std::int64_t(mesh.vertices.size());
   s.faces = std::int64_t(mesh.faces.size());
-  // Directed half-edges (a,b,face) sorted by undirected key.
+  // Directed half-edges grouped by undirected edge; a = the half-edge's origin, f = its face.
   struct HE { std::uint64_t key; int a, f; };
-  std::vector<HE> he(mesh.faces.size() * 3);
-  tbb::parallel_for(size_t(0), mesh.faces.size(), [&](size_t fi) {
-    auto& t = mesh.faces[fi];
-    for (int c = 0; c < 3; ++c) {
-      int a = t[c], b = t[(c + 1) % 3];
-      std::uint64_t key = (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-      he[fi * 3 + c] = {key, a, int(fi)};
-    }
-  });
-  tbb::parallel_sort(he.begin(), he.end(), [](const HE& x, const HE& y) {
-    return x.key < y.key || (x.key == y.key && x.f < y.f);
-  });
+  std::vector<HE> he;
+  {
+    const std::vector<EdgeHalfedge> grouped = halfedges_by_edge(mesh);
+    he.resize(grouped.size());
+    tbb::parallel_for(std::size_t(0), grouped.size(), [&](std::size_t i) {
+      const int h = grouped[i].h;
+      he[i] = {grouped[i].key, mesh.faces[std::size_t(h / 3)][h % 3], h / 3};
+    });
+  }
   // Fans: union the corners (face, vertex) across manifold edges.
   UnionFind fan(mesh.faces.size() * 3);
   auto corner_of = [&](int fi, int v) {
@@ -296,13 +295,11 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
     }
     i = j;
   }
-  {
-    std::vector<int> fans_at(mesh.vertices.size(), 0);
-    for (size_t fi = 0; fi < mesh.faces.size(); ++fi)
-      for (int c = 0; c < 3; ++c)
-        if (fan.find(int(fi * 3 + c)) == int(fi * 3 + c)) ++fans_at[mesh.faces[fi][c]];
-    for (int n : fans_at) s.nonmanifold_vertices += n > 1;
-  }
+  std::vector<int> fans_at(mesh.vertices.size(), 0);
+  for (size_t fi = 0; fi < mesh.faces.size(); ++fi)
+    for (int c = 0; c < 3; ++c)
+      if (fan.find(int(fi * 3 + c)) == int(fi * 3 + c)) ++fans_at[mesh.faces[fi][c]];
+  for (int n : fans_at) s.nonmanifold_vertices += n > 1;
   s.euler = s.vertices - s.edges + s.faces;
 
   std::vector<int> label;
@@ -323,14 +320,8 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
     if (j - i != 2 || he[i].a == he[i + 1].a) ++cbad[l];
     i = j;
   }
-  {
-    std::vector<int> fans_at(mesh.vertices.size(), 0);
-    for (size_t fi = 0; fi < mesh.faces.size(); ++fi)
-      for (int c = 0; c < 3; ++c)
-        if (fan.find(int(fi * 3 + c)) == int(fi * 3 + c)) ++fans_at[mesh.faces[fi][c]];
-    for (size_t v = 0; v < fans_at.size(); ++v)
-      if (fans_at[v] > 1) ++cbad[vlabel[v]];
-  }
+  for (size_t v = 0; v < fans_at.size(); ++v)
+    if (fans_at[v] > 1) ++cbad[vlabel[v]];
   s.component_genus.assign(s.components, -1);
   s.component_faces = cf;
   s.genus = 0;
