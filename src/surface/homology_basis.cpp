@@ -13,76 +13,65 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
   code_.assign(std::size_t(3) * F, kUnset);
   first_.assign(F, -1);
   last_.assign(F, -1);
-  // Primal tree: breadth first over the vertices, through the half-edges leaving each vertex.
-  std::vector<char> seen_vertex(V, 0);
-  std::vector<int> queue;
-  auto leaving = [&](int v, auto&& fn) {
-    for (int q = adj.vf_start[v]; q < adj.vf_start[v + 1]; ++q) {
-      const int f = adj.vf[q];
-      for (int k = 0; k < 3; ++k)
-        if (mesh.faces[f][k] == v) fn(3 * f + k, mesh.faces[f][(k + 1) % 3]);
-    }
-  };
-  std::vector<char> component_done(components, 0);
-  std::vector<int> roots(components, -1);
-  for (int f = 0; f < F; ++f) {
+  auto in_basis = [&](int f) {
     const int c = face_label[f];
-    if (c < 0 || !closed[c] || component_done[c]) continue;
-    component_done[c] = 1;
-    roots[c] = f;
-    const int v0 = mesh.faces[f][0];
-    seen_vertex[v0] = 1;
-    queue.assign(1, v0);
-    for (std::size_t i = 0; i < queue.size(); ++i)
-      leaving(queue[i], [&](int h, int w) {
-        if (seen_vertex[w]) return;
-        seen_vertex[w] = 1;
-        code_[h] = code_[adj.twin[h]] = kTree;
-        queue.push_back(w);
-      });
+    return c >= 0 && closed[c];
+  };
+  // Any spanning trees serve. Built by union-find over the edges in half-edge order, they read the mesh
+  // front to back; a breadth-first search jumps across it, and on surfaces of millions of faces its cache
+  // misses were most of the time.
+  std::vector<int> set(std::size_t(std::max(V, F)));
+  auto find = [&](int x) {
+    while (set[x] != x) x = set[x] = set[set[x]];
+    return x;
+  };
+  auto unite = [&](int a, int b) {
+    a = find(a), b = find(b);
+    if (a == b) return false;
+    set[std::max(a, b)] = std::min(a, b);
+    return true;
+  };
+  // Primal tree over the vertices.
+  for (int v = 0; v < V; ++v) set[v] = v;
+  for (int h = 0; h < 3 * F; ++h) {
+    const int t = adj.twin[h];
+    if (t < h || !in_basis(MeshAdjacency::face(h))) continue;
+    const auto& tri = mesh.faces[MeshAdjacency::face(h)];
+    if (unite(tri[h % 3], tri[(h + 1) % 3])) code_[h] = code_[t] = kTree;
   }
-  // Cotree: breadth first over the faces through non-tree edges; then depth-first numbering of it.
-  std::vector<int> parent(F, -1);
-  std::vector<char> seen_face(F, 0);
-  for (int c = 0; c < components; ++c) {
-    if (roots[c] < 0) continue;
-    queue.assign(1, roots[c]);
-    seen_face[roots[c]] = 1;
-    for (std::size_t i = 0; i < queue.size(); ++i) {
-      const int f = queue[i];
-      for (int k = 0; k < 3; ++k) {
-        const int h = 3 * f + k, t = adj.twin[h];
-        if (code_[h] == kTree) continue;
-        const int g = MeshAdjacency::face(t);
-        if (seen_face[g]) continue;
-        seen_face[g] = 1;
-        parent[g] = f;
-        code_[h] = code_[t] = 2 * g + 1;
-        queue.push_back(g);
-      }
-    }
+  // Cotree over the faces, through the edges not in the tree.
+  constexpr std::int32_t kCotree = -3;
+  for (int f = 0; f < F; ++f) set[f] = f;
+  for (int h = 0; h < 3 * F; ++h) {
+    const int t = adj.twin[h];
+    if (t < h || code_[h] != kUnset || !in_basis(MeshAdjacency::face(h))) continue;
+    if (unite(MeshAdjacency::face(h), MeshAdjacency::face(t))) code_[h] = code_[t] = kCotree;
   }
-  std::vector<int> child_start(F + 1, 0), children;
-  for (int f = 0; f < F; ++f)
-    if (parent[f] >= 0) ++child_start[parent[f] + 1];
-  for (int f = 0; f < F; ++f) child_start[f + 1] += child_start[f];
-  children.resize(child_start[F]);
-  {
-    std::vector<int> fill(child_start.begin(), child_start.end() - 1);
-    for (int f = 0; f < F; ++f)
-      if (parent[f] >= 0) children[fill[parent[f]]++] = f;
-  }
+  std::vector<int>().swap(set);
+  // Each cotree rooted at its first face and numbered depth first; a cotree edge gets the code of the face
+  // below it.
+  std::vector<int> parent(F, -1), order, stack;
+  order.reserve(std::size_t(F));
   std::int32_t counter = 0;
-  std::vector<int> order;  // preorder
-  for (int c = 0; c < components; ++c) {
-    if (roots[c] < 0) continue;
-    std::vector<int> stack{roots[c]};
+  for (int root = 0; root < F; ++root) {
+    if (first_[root] >= 0 || !in_basis(root)) continue;
+    stack.assign(1, root);
+    first_[root] = 0;  // marks it pushed
     while (!stack.empty()) {
       const int f = stack.back();
       stack.pop_back();
       first_[f] = counter++;
       order.push_back(f);
-      for (int q = child_start[f]; q < child_start[f + 1]; ++q) stack.push_back(children[q]);
+      for (int k = 0; k < 3; ++k) {
+        const int h = 3 * f + k;
+        if (code_[h] != kCotree) continue;
+        const int t = adj.twin[h], g = MeshAdjacency::face(t);
+        if (g == parent[f]) continue;
+        parent[g] = f;
+        first_[g] = 0;
+        code_[h] = code_[t] = 2 * g + 1;
+        stack.push_back(g);
+      }
     }
   }
   // last_ = first_ + subtree size - 1: sizes gathered from the leaves up (reverse preorder).
