@@ -115,6 +115,11 @@ bool HomologyBasis::null_homologous(const std::vector<int>& loop) const {
   }
   std::sort(edges.begin(), edges.end());
   std::vector<char> bits(std::size_t(end - begin), 0);
+  // A cotree edge flips the leftover edges with exactly one face in its interval [lo, hi]. Summed over the
+  // loop's cotree edges, a leftover edge's bit is the parity of the intervals holding its first face plus
+  // those holding its second: with the intervals' ends sorted (lo, and hi + 1), that parity at x is the
+  // parity of the ends <= x. Time (cotree edges + 2g) x log, instead of cotree edges x 2g.
+  std::vector<std::int32_t> ends;
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
     while (j < edges.size() && edges[j] == edges[i]) ++j;
@@ -127,12 +132,13 @@ bool HomologyBasis::null_homologous(const std::vector<int>& loop) const {
       continue;
     }
     const int f = code / 2;  // the cotree edge above face f
-    const std::int32_t lo = first_[f], hi = last_[f];
-    for (int l = begin; l < end; ++l) {
-      const auto& fl = leftover_faces_[l];
-      const bool a = fl[0] >= lo && fl[0] <= hi, b = fl[1] >= lo && fl[1] <= hi;
-      bits[l - begin] ^= char(a != b);
-    }
+    ends.push_back(first_[f]);
+    ends.push_back(last_[f] + 1);
+  }
+  if (!ends.empty()) {
+    std::sort(ends.begin(), ends.end());
+    auto parity = [&](std::int32_t x) { return char((std::upper_bound(ends.begin(), ends.end(), x) - ends.begin()) & 1); };
+    for (int l = begin; l < end; ++l) bits[l - begin] ^= char(parity(leftover_faces_[l][0]) ^ parity(leftover_faces_[l][1]));
   }
   return std::none_of(bits.begin(), bits.end(), [](char b) { return b != 0; });
 }

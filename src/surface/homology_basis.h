@@ -1,13 +1,14 @@
 #pragma once
 // Z/2 homology classes of edge cycles on the closed components of a surface, in time proportional to the
-// cycle's length times the component's genus (not to the surface's size).
+// cycle's length plus the component's genus, times a logarithm (not to the surface's size).
 //
 // Tree-cotree decomposition (Eppstein 2003): a spanning tree T of the vertices, a spanning tree C of the
 // faces through edges not in T, and the 2g edges left over, whose fundamental cycles (edge + tree path) are
 // a basis of H1(component; Z/2). A cycle's class is the sum of its non-tree edges' classes. A leftover edge
 // is a basis vector. A cotree edge e, above the subtree S of faces that C hangs below it, has the class of
 // the leftover edges with exactly one face in S (the boundary of the faces of S is null and crosses C only
-// at e). With the faces of C numbered in depth-first order, "in S" is an interval test.
+// at e). With the faces of C numbered in depth-first order, "in S" is an interval test, and the parity of
+// the intervals of a cycle's cotree edges holding a face is a binary search in their sorted ends.
 #include <array>
 #include <cstdint>
 #include <vector>

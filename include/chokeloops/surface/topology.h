@@ -36,7 +36,7 @@ class SurfaceTopology {
   bool contractible_fast(const std::vector<int>& loop);
   // Null in H1(surface; Z/2), exact for any closed edge path (simple or not) on a closed component: a
   // tree-cotree basis of the surface's homology (built once, on the first query) reduces it to interval
-  // tests, time proportional to the loop's length times the component's genus. A loop that is not null is
+  // tests, time proportional to the loop's length plus the component's genus, times a log. A loop that is not null is
   // non-contractible. On a component with boundary it answers contractible() instead (a sufficient
   // condition only).
   bool null_homologous(const std::vector<int>& loop);
