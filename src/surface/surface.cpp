@@ -263,17 +263,10 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   SurfaceStats s;
   s.vertices = std::int64_t(mesh.vertices.size());
   s.faces = std::int64_t(mesh.faces.size());
-  // Directed half-edges grouped by undirected edge; a = the half-edge's origin, f = its face.
-  struct HE { std::uint64_t key; int a, f; };
-  std::vector<HE> he;
-  {
-    const std::vector<EdgeHalfedge> grouped = halfedges_by_edge(mesh);
-    he.resize(grouped.size());
-    tbb::parallel_for(std::size_t(0), grouped.size(), [&](std::size_t i) {
-      const int h = grouped[i].h;
-      he[i] = {grouped[i].key, mesh.faces[std::size_t(h / 3)][h % 3], h / 3};
-    });
-  }
+  // Directed half-edges grouped by undirected edge.
+  const std::vector<EdgeHalfedge> he = halfedges_by_edge(mesh);
+  auto face_of = [&](std::size_t i) { return he[i].h / 3; };
+  auto origin_of = [&](std::size_t i) { return mesh.faces[std::size_t(he[i].h / 3)][he[i].h % 3]; };
   // Fans: union the corners (face, vertex) across manifold edges.
   UnionFind fan(mesh.faces.size() * 3);
   auto corner_of = [&](int fi, int v) {
@@ -288,10 +281,10 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
     if (n == 1) ++s.boundary_edges;
     else if (n > 2) ++s.nonmanifold_edges;
     else {
-      if (he[i].a == he[i + 1].a) ++s.inconsistent_edges;
+      if (origin_of(i) == origin_of(i + 1)) ++s.inconsistent_edges;
       int a = int(he[i].key >> 32), b = int(he[i].key & 0xffffffffu);
-      fan.unite(corner_of(he[i].f, a), corner_of(he[i + 1].f, a));
-      fan.unite(corner_of(he[i].f, b), corner_of(he[i + 1].f, b));
+      fan.unite(corner_of(face_of(i), a), corner_of(face_of(i + 1), a));
+      fan.unite(corner_of(face_of(i), b), corner_of(face_of(i + 1), b));
     }
     i = j;
   }
@@ -315,9 +308,9 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh) {
   for (size_t i = 0; i < he.size();) {
     size_t j = i;
     while (j < he.size() && he[j].key == he[i].key) ++j;
-    int l = label[he[i].f];
+    int l = label[face_of(i)];
     ++ce[l];
-    if (j - i != 2 || he[i].a == he[i + 1].a) ++cbad[l];
+    if (j - i != 2 || origin_of(i) == origin_of(i + 1)) ++cbad[l];
     i = j;
   }
   for (size_t v = 0; v < fans_at.size(); ++v)
