@@ -11,8 +11,7 @@
 // vertices touch form a group; batch_check.h): a group must keep the components and sealed cavities (one
 // labelling of both sides after the batch) and lower the genus (its local change of the Euler
 // characteristic). Groups that fail are noted and undone, the others stay, with no bisection and no
-// persistence per check; a pair whose edit left the genus as it was (a sub-voxel pair: flipping its
-// membrane's shore left the handle) has its other side tried in the next wave of the same round; one persistence per round then finds the pairs left and must agree with what the
+// persistence per check; one persistence per round then finds the pairs left and must agree with what the
 // labels and the Euler characteristic predicted (else an internal error). Pairs selected but left (e.g.
 // their membrane did not close, or their edit was undone) are asked again in the next round, from the
 // edited field, with the other membrane shape first (the flood's sheet on odd rounds, a plane on even
@@ -24,7 +23,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <sstream>
 #include <unordered_set>
@@ -223,16 +221,14 @@ BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, 
 std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, detail::SideLabels& labels,
                                       int floor, std::vector<std::string>& notes,
                                       std::vector<std::pair<Side, std::array<double, 3>>>& failed, double& t_labels,
-                                      double& t_persistence, const std::function<std::vector<FilterEdit>(const FilterEdit&)>& other_side) {
+                                      double& t_persistence) {
   const FreudenthalComplex cx(grid.dims);
   int genus = now.summary.genus;
-  std::vector<FilterEdit> retry;  // the other side of pairs whose edit left the genus as it was
   std::vector<FilterEdit> kept, waiting;
   // Waves: a batch is applied and judged until every group in it passes; edits that touched others that
   // failed with them wait for the next wave, judged on the field the batch left.
-  while (!edits.empty() || !waiting.empty() || !retry.empty()) {
-    if (edits.empty() && !waiting.empty()) edits = std::move(waiting), waiting.clear();
-    if (edits.empty()) edits = std::move(retry), retry.clear();
+  while (!edits.empty() || !waiting.empty()) {
+    if (edits.empty()) edits = std::move(waiting), waiting.clear();
     const Undo undo = apply_edits(grid, edits);
     const BatchGroups groups = group_changes(grid, cx, edits, undo);
     const auto t_l = Clock::now();
@@ -279,10 +275,6 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       for (std::size_t e : members) {
         fate[e] = Drop;
         failed.push_back({edits[e].side, edits[e].point});
-        // A sub-voxel pair whose edit flipped its membrane's shore yet left the handle: its other side is
-        // tried in the next wave, on this field, rather than after another persistence run.
-        if (v.euler_change <= 0 && other_side)
-          for (FilterEdit& o : other_side(edits[e])) retry.push_back(std::move(o));
         notes.push_back(describe(edits[e]) + " " + why + ": undone");
       }
     }
@@ -414,33 +406,6 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     });
     t_membranes += ms_since(t_m);
     std::vector<FilterEdit> edits;
-    auto make_edit = [&](const Candidate& c, Side side) {
-      const Choke& g = side == Side::Handle ? c.pair->handle : c.pair->tunnel;
-      const MembraneVoxels& m = side == Side::Handle ? c.cut_voxels : c.fill_voxels;
-      FilterEdit e;
-      e.side = side;
-      e.round = round;
-      e.depth = g.depth;
-      e.persistence = c.pair->persistence;
-      e.point = g.point;
-      e.voxels = m.shore;
-      e.volume = double(e.voxels.size()) * voxel_volume;
-      return e;
-    };
-    // The other side of a pair whose edit was undone, when its membrane closed and it has not failed itself.
-    auto other_side = [&](const FilterEdit& failed_edit) {
-      std::vector<FilterEdit> out;
-      for (const Candidate& c : candidates) {
-        const Choke& g = failed_edit.side == Side::Handle ? c.pair->handle : c.pair->tunnel;
-        if (g.point != failed_edit.point) continue;
-        const bool other_cut = failed_edit.side == Side::Tunnel;
-        const Choke& o = other_cut ? c.pair->handle : c.pair->tunnel;
-        if ((other_cut ? c.cut && c.cut_voxels.found : c.fill && c.fill_voxels.found) && !failed_before(o))
-          out.push_back(make_edit(c, other_cut ? Side::Handle : Side::Tunnel));
-        break;
-      }
-      return out;
-    };
     for (const Candidate& c : candidates) {
       const MembraneVoxels* pick = nullptr;
       Side side = Side::Handle;
@@ -457,12 +422,20 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
                              ", tunnel depth " + std::to_string(c.pair->tunnel.depth) + "): " + why);
         continue;
       }
-      edits.push_back(make_edit(c, side));
+      const Choke& g = side == Side::Handle ? c.pair->handle : c.pair->tunnel;
+      FilterEdit e;
+      e.side = side;
+      e.round = round;
+      e.depth = g.depth;
+      e.persistence = c.pair->persistence;
+      e.point = g.point;
+      e.voxels = pick->shore;
+      e.volume = double(e.voxels.size()) * voxel_volume;
+      edits.push_back(std::move(e));
     }
     const auto t_e = Clock::now();
     undone.clear();
-    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, labels, options.keep_genus, undone, failed, t_labels,
-                                                   t_persistence, other_side);
+    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, labels, options.keep_genus, undone, failed, t_labels, t_persistence);
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;
