@@ -8,7 +8,8 @@
 // THP mode "madvise" (Debian's default), memory is huge-page backed only where the program asks with
 // madvise(MADV_HUGEPAGE), which glibc does for malloc when its tunable glibc.malloc.hugetlb=1 is set; glibc
 // reads tunables only at start-up, hence the restart. Nothing happens when the tunable is already set, when
-// THP is "always" or "never", when CHOKELOOPS_HUGE_PAGES=0, or when the restart fails (the run goes on).
+// THP is "always" or "never", under valgrind, when CHOKELOOPS_HUGE_PAGES=0, or when the restart fails (the
+// run goes on).
 namespace chokeloops {
 
 void restart_with_huge_pages(char** argv);

@@ -12,6 +12,9 @@ namespace chokeloops {
 void restart_with_huge_pages(char** argv) {
   const char* opt = std::getenv("CHOKELOOPS_HUGE_PAGES");
   if (opt && std::string(opt) == "0") return;
+  // Under valgrind the restarted process would run outside it (valgrind does not follow exec by default).
+  const char* preload = std::getenv("LD_PRELOAD");
+  if (preload && std::strstr(preload, "vgpreload")) return;
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   if (tunables && std::strstr(tunables, "glibc.malloc.hugetlb")) return;
   std::ifstream mode_file("/sys/kernel/mm/transparent_hugepage/enabled");
