@@ -3,7 +3,10 @@
 // verified by CGAL, and cutting all handle generators leaves one sphere (Euler characteristic 2; the cup: see Model).
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -11,28 +14,13 @@
 #include "chokeloops/analyze.h"
 #include "chokeloops/loops/cut_mesh.h"
 #include "chokeloops/surface/topology.h"
+#include "mesh_shapes.h"
 #include "temp_dir.h"
 
 using namespace chokeloops;
+using test::polyhedral_torus;
 
 namespace {
-
-// A torus of radii R, r around z, n x m quads split into triangles; closed, outward oriented.
-TriangleMesh polyhedral_torus(double R, double r, int n, int m) {
-  TriangleMesh t;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
-      t.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  auto id = [&](int i, int j) { return ((i + n) % n) * m + (j + m) % m; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      t.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      t.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return t;
-}
 
 // Every point is where input_points (InputPoint) says, and the named edges and faces exist.
 void expect_points_located(const InputMesh& in, const InputLoop& l) {
@@ -129,6 +117,12 @@ TEST(InputLoops, TorusLoopsKeepClassAndLength) {
     expect_cut(torus, c, 1, 1);
     EXPECT_EQ(mesh_topology(read_mesh(cut)).genus, 0);
   }
+  // The command line: the same cut by id, and an id with no loop refused with exit 2.
+  const std::string cli = std::string("'") + CHOKELOOPS_CLI + "' cut '" + path + "' '" + (dir / "out").string() + "' -o '";
+  EXPECT_EQ(std::system((cli + (dir / "cli.ply").string() + "' --ids 0 --quiet").c_str()), 0);
+  EXPECT_EQ(mesh_topology(read_mesh((dir / "cli.ply").string())).genus, 0);
+  const int refused = std::system((cli + (dir / "cli.ply").string() + "' --ids 99 --quiet 2>/dev/null").c_str());
+  EXPECT_TRUE(WIFEXITED(refused) && WEXITSTATUS(refused) == 2);
   std::filesystem::remove_all(dir);
 }
 
