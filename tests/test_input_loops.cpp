@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include "chokeloops/analyze.h"
 #include "chokeloops/loops/cut_mesh.h"
@@ -100,6 +101,14 @@ TEST(InputLoops, TorusLoopsKeepClassAndLength) {
     expect_points_located(res.input_mesh, l);
   }
   EXPECT_EQ(generators, 2);
+  {  // the same loops, to the bit, on one thread
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    const auto again = transfer_loops(res.input_mesh, res.surface, res.loops);
+    for (std::size_t i = 0; i < again.size(); ++i) {
+      EXPECT_EQ(again[i].loop.points, res.input_loops[i].loop.points);
+      EXPECT_EQ(again[i].loop.edge_path, res.input_loops[i].loop.edge_path);
+    }
+  }
 
   write_report(res, o, (dir / "out").string());
   std::ifstream in(dir / "out" / "input_loops.json");
