@@ -146,9 +146,9 @@ TEST(InputLoops, CutRefusesLoopsThatAreNotSimpleEdgePaths) {
 }
 
 namespace {
-// `cut`: handle generators the cut reaches. On the cup the two handle generators carried to the input mesh
-// cross once (on the marching surface at 128 they come within 0.05, a third of a voxel): the second one is
-// reported as crossing the first cut and left uncut, so the cup keeps genus 1.
+// `cut`: handle generators the cut reaches. The cup's two handle generator loops cross once, already on the
+// marching surface, and still after carrying: the second one is reported as crossing the first cut and left
+// uncut, so the cup keeps genus 1 (README, Loops on the input mesh).
 struct Model { const char* file; int genus; int resolution; int cut; };
 void PrintTo(const Model& m, std::ostream* os) { *os << m.file; }
 }  // namespace
