@@ -135,6 +135,42 @@ TEST(InputLoops, TorusLoopsKeepClassAndLength) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(InputLoops, AnOpenMeshIsRepairedAndTheLoopsSayWhereTheyCrossAFilledHole) {
+  // A hole across the inner equator (3 x 2 quads): the repair fills it; the tunnel loop, which runs along the
+  // inner equator, goes through the patch and says so.
+  const int n = 96, m = 40;
+  TriangleMesh torus = polyhedral_torus(1, 0.35, n, m);
+  std::vector<std::array<int, 3>> kept;
+  for (std::size_t f = 0; f < torus.faces.size(); ++f) {
+    const int quad = int(f / 2), i = quad / m, j = quad % m;
+    if (!(i < 3 && (j == 19 || j == 20))) kept.push_back(torus.faces[f]);
+  }
+  torus.faces = kept;
+  const auto dir = test::temp_dir("input_loops_open");
+  const std::string path = (dir / "open_torus.off").string();
+  write_mesh(torus, path);
+  AnalyzeOptions o;
+  o.levelset.resolution = 96;
+  AnalyzeResult res = analyze(path, o);
+  ASSERT_TRUE(res.has_input_loops);
+  EXPECT_TRUE(res.input_mesh.repaired);
+  int added = 0;
+  for (char a : res.input_mesh.added_face) added += a;
+  EXPECT_GT(added, 0);
+  bool warned = false;
+  for (auto& w : res.warnings) warned |= w.find("repaired mesh") != std::string::npos;
+  EXPECT_TRUE(warned);
+  bool through_patch = false;
+  for (const InputLoop& l : res.input_loops) {
+    if (l.loop.choke.kind != Kind::Generator) continue;
+    ASSERT_TRUE(l.loop.found) << l.loop.note;
+    EXPECT_TRUE(l.verified);
+    if (l.loop.choke.side == Side::Tunnel) through_patch = l.loop.note.find("repair added") != std::string::npos;
+  }
+  EXPECT_TRUE(through_patch);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(InputLoops, CutRefusesLoopsThatAreNotSimpleEdgePaths) {
   const TriangleMesh torus = polyhedral_torus(1, 0.3, 12, 8);
   EXPECT_THROW(cut_along_loops(torus, {{0, 1}}), Error);

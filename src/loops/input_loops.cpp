@@ -2,8 +2,10 @@
 // point's triangle, shortest edge paths between consecutive corners, shortening in the class, CGAL's check.
 #include "chokeloops/loops/input_loops.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <set>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -102,8 +104,8 @@ bool mark_missing(const Loop& grid, InputLoop& out) {
 }
 
 // Carries one grid loop; sets found/note on failure.
-void carry(const SurfaceMesh& m, const MeshAdjacency& adj, SurfaceTopology& topology, const Tree& tree,
-           const Triangles& triangles, const Loop& grid, const InputLoopOptions& options, InputLoop& out) {
+void carry(const SurfaceMesh& m, const std::vector<char>& added, const MeshAdjacency& adj, SurfaceTopology& topology,
+           const Tree& tree, const Triangles& triangles, const Loop& grid, const InputLoopOptions& options, InputLoop& out) {
   if (mark_missing(grid, out)) return;
   const Polyline3 corners = project_to_corners(m, tree, triangles, grid.points);
   if (corners.size() < 3) {
@@ -154,6 +156,20 @@ void carry(const SurfaceMesh& m, const MeshAdjacency& adj, SurfaceTopology& topo
   out.where = locate(m, adj, s.points, s.strip_faces, s.edge_path);
   describe_loop(out.loop);
   if (options.shorten && s.rings == 0) out.loop.note = "left unshortened: no annulus band around it on the input mesh";
+  if (!added.empty()) {
+    std::set<int> faces(s.strip_faces.begin(), s.strip_faces.end());
+    for (std::size_t k = 0; k < s.edge_path.size() && s.strip_faces.empty(); ++k) {
+      const int h = adj.halfedge(m, s.edge_path[k], s.edge_path[(k + 1) % s.edge_path.size()]);
+      if (h >= 0) faces.insert(MeshAdjacency::face(h));
+    }
+    int through = 0;
+    for (int f : faces) through += added[std::size_t(f)];
+    if (through) {
+      if (!out.loop.note.empty()) out.loop.note += "; ";
+      out.loop.note += "runs through " + std::to_string(through) +
+                       " face(s) that the repair added to close holes: there it is not on the file's surface";
+    }
+  }
 }
 }  // namespace
 
@@ -170,6 +186,19 @@ InputMesh input_mesh_from(const TriangleMesh& mesh, const std::string& name) {
   }
   in.mesh.vertices = use->vertices;
   in.mesh.faces = use->faces;
+  if (in.repaired) {
+    // The repair merges and renumbers vertices, so faces are matched by their corners' points.
+    using Corners = std::array<P3, 3>;
+    auto corners = [](const TriangleMesh& t, const std::array<int, 3>& f) {
+      Corners c{t.vertices[std::size_t(f[0])], t.vertices[std::size_t(f[1])], t.vertices[std::size_t(f[2])]};
+      std::sort(c.begin(), c.end());
+      return c;
+    };
+    std::set<Corners> file_faces;
+    for (const auto& f : mesh.faces) file_faces.insert(corners(mesh, f));
+    in.added_face.resize(use->faces.size());
+    for (std::size_t f = 0; f < use->faces.size(); ++f) in.added_face[f] = !file_faces.count(corners(*use, use->faces[f]));
+  }
   return in;
 }
 
@@ -207,7 +236,7 @@ std::vector<InputLoop> transfer_loops(const InputMesh& input, const SurfaceMesh&
   tree.accelerate_distance_queries();
   tbb::parallel_for(std::size_t(0), grid_loops.size(), [&](std::size_t i) {
     const auto t0 = std::chrono::steady_clock::now();
-    carry(m, adj, topology, tree, triangles, grid_loops[i], options, out[i]);
+    carry(m, input.added_face, adj, topology, tree, triangles, grid_loops[i], options, out[i]);
     out[i].transfer_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   });
   return out;

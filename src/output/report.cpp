@@ -111,6 +111,9 @@ std::string input_loops_json(const AnalyzeResult& r) {
   j["input_mesh"] = {{"vertices", r.input_mesh.mesh.vertices.size()}, {"faces", r.input_mesh.mesh.faces.size()},
                      {"repaired", r.input_mesh.repaired}, {"closed", m.closed}, {"components", m.components},
                      {"genus", m.genus}, {"euler", m.euler}};
+  int added = 0;
+  for (char a : r.input_mesh.added_face) added += a;
+  if (r.input_mesh.repaired) j["input_mesh"]["faces_added_by_repair"] = added;
   FreudenthalComplex cx(r.grid.dims);
   json loops = json::array();
   int carried = 0;

@@ -19,6 +19,8 @@ struct InputMesh {
   SurfaceMesh mesh;  // vertex_edge is empty
   bool repaired = false;
   MeshReport report;  // of `mesh`
+  // Repaired meshes: per face, 1 when no face of the file has its three corners (hole filling added it).
+  std::vector<char> added_face;
 };
 InputMesh load_input_mesh(const std::string& path);
 InputMesh input_mesh_from(const TriangleMesh& mesh, const std::string& name);
