@@ -70,6 +70,16 @@ std::vector<std::vector<int>> handle_generator_paths(const AnalyzeResult& r) {
   return paths;
 }
 
+// Writes `mesh` to `path` and analyzes it at resolution 96, input loops included.
+AnalyzeResult analyze_written(const TriangleMesh& mesh, const std::string& path, AnalyzeOptions& o) {
+  write_mesh(mesh, path);
+  o.levelset.resolution = 96;
+  AnalyzeResult r = analyze(path, o);
+  EXPECT_TRUE(r.has_input_loops);
+  EXPECT_EQ(r.input_loops.size(), r.loops.size());
+  return r;
+}
+
 }  // namespace
 
 TEST(InputLoops, TorusLoopsKeepClassAndLength) {
@@ -78,11 +88,8 @@ TEST(InputLoops, TorusLoopsKeepClassAndLength) {
   const TriangleMesh torus = polyhedral_torus(R, r, n, m);
   const auto dir = test::temp_dir("input_loops_torus");
   const std::string path = (dir / "torus.off").string();
-  write_mesh(torus, path);
   AnalyzeOptions o;
-  o.levelset.resolution = 96;
-  AnalyzeResult res = analyze(path, o);
-  ASSERT_TRUE(res.has_input_loops);
+  AnalyzeResult res = analyze_written(torus, path, o);
   EXPECT_FALSE(res.input_mesh.repaired);
   ASSERT_EQ(res.input_loops.size(), res.loops.size());
   // The polygons' perimeters: the meridian (m sides of the tube) and the inner equator (n sides).
@@ -147,12 +154,8 @@ TEST(InputLoops, AnOpenMeshIsRepairedAndTheLoopsSayWhereTheyCrossAFilledHole) {
   }
   torus.faces = kept;
   const auto dir = test::temp_dir("input_loops_open");
-  const std::string path = (dir / "open_torus.off").string();
-  write_mesh(torus, path);
   AnalyzeOptions o;
-  o.levelset.resolution = 96;
-  AnalyzeResult res = analyze(path, o);
-  ASSERT_TRUE(res.has_input_loops);
+  AnalyzeResult res = analyze_written(torus, (dir / "open_torus.off").string(), o);
   EXPECT_TRUE(res.input_mesh.repaired);
   int added = 0;
   for (char a : res.input_mesh.added_face) added += a;
