@@ -177,6 +177,12 @@ TEST(InputLoops, AnOpenMeshIsRepairedAndTheLoopsSayWhereTheyCrossAFilledHole) {
 TEST(InputLoops, CutRefusesLoopsThatAreNotSimpleEdgePaths) {
   const TriangleMesh torus = polyhedral_torus(1, 0.3, 12, 8);
   EXPECT_THROW(cut_along_loops(torus, {{0, 1}}), Error);
+  try {  // named by its id in input_loops.json when given
+    cut_along_loops(torus, {{0, 1}}, {7});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("loop 7"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(cut_along_loops(torus, {{0, 8, 0, 8}}), Error);
   EXPECT_THROW(cut_along_loops(torus, {{0, 17, 40}}), Error);  // not joined by edges
   // A meridian of the polyhedral torus is an edge loop: the cut gives a sphere.

@@ -55,8 +55,9 @@ std::vector<V> follow_copies(const SM& sm, const std::vector<int>& loop, const s
 }
 }  // namespace
 
-CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vector<int>>& loops) {
+CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vector<int>>& loops, const std::vector<int>& ids) {
   CutResult r;
+  auto name = [&](std::size_t i) { return "loop " + std::to_string(i < ids.size() ? ids[i] : int(i)); };
   r.before = mesh_topology(mesh);
   SM sm;
   for (const auto& v : mesh.vertices) sm.add_vertex(K::Point_3(v[0], v[1], v[2]));
@@ -70,13 +71,13 @@ CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vecto
   for (std::size_t i = 0; i < loops.size(); ++i) {
     const auto& loop = loops[i];
     if (!loop_is_simple(loop))
-      throw Error("cannot cut along loop " + std::to_string(i) + ": it passes a vertex twice or has fewer than 3 vertices");
+      throw Error("cannot cut along " + name(i) + ": it passes a vertex twice or has fewer than 3 vertices");
     for (std::size_t k = 0; k < loop.size(); ++k) {
       const int a = loop[k], b = loop[(k + 1) % loop.size()];
       if (a < 0 || b < 0 || std::size_t(a) >= nv || std::size_t(b) >= nv)
-        throw Error("cannot cut along loop " + std::to_string(i) + ": vertex index out of range");
+        throw Error("cannot cut along " + name(i) + ": vertex index out of range");
       if (!CGAL::halfedge(V(a), V(b), sm).second)
-        throw Error("cannot cut along loop " + std::to_string(i) + ": vertices " + std::to_string(a) + " and " +
+        throw Error("cannot cut along " + name(i) + ": vertices " + std::to_string(a) + " and " +
                     std::to_string(b) + " are not joined by an edge");
     }
   }
@@ -94,7 +95,7 @@ CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vecto
   for (std::size_t i = 0; i < loops.size(); ++i) {
     const std::vector<V> path = follow_copies(sm, loops[i], copies_of);
     if (path.empty()) {
-      r.notes.push_back("loop " + std::to_string(i) + " crosses an earlier cut: not cut");
+      r.notes.push_back(name(i) + " crosses an earlier cut: not cut");
       continue;
     }
     for (auto e : sm.edges()) put(cut, e, false);
@@ -120,7 +121,7 @@ CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vecto
     for (auto h : holes) {
       std::vector<SM::Face_index> patch;
       PMP::triangulate_hole(sm, h, std::back_inserter(patch));
-      if (patch.empty()) throw Error("cannot cap the cut along loop " + std::to_string(i) + ": CGAL's triangulate_hole found no triangulation");
+      if (patch.empty()) throw Error("cannot cap the cut along " + name(i) + ": CGAL's triangulate_hole found no triangulation");
       r.cap_faces += int(patch.size());
       ++r.caps;
     }

@@ -61,7 +61,7 @@ CutResult cut_mesh_file(const std::string& input, const std::string& outdir, con
   std::vector<std::vector<int>> paths;
   for (int id : ids) paths.push_back(loops[std::size_t(id)].at("edge_path").get<std::vector<int>>());
   TriangleMesh tm{mesh.mesh.vertices, mesh.mesh.faces};
-  CutResult r = cut_along_loops(tm, paths);
+  CutResult r = cut_along_loops(tm, paths, ids);
   write_mesh(r.mesh, output);
   if (cut_ids) *cut_ids = ids;
   return r;

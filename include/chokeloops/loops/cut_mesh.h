@@ -23,7 +23,9 @@ struct CutResult {
 // that touches an earlier one follows the earlier cut's vertex copies). Throws Error when a
 // loop is not a path of mesh edges, repeats a vertex (only simple loops are cut) or the mesh is not an
 // orientable manifold that CGAL's Surface_mesh accepts.
-CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vector<int>>& loops);
+// Messages name loop i by ids[i] when given (input_loops.json's ids), else by i.
+CutResult cut_along_loops(const TriangleMesh& mesh, const std::vector<std::vector<int>>& loops,
+                          const std::vector<int>& ids = {});
 
 // What `chokeloops cut` selects: explicit loop ids, or every verified generator of a side.
 struct CutSelection {
