@@ -80,6 +80,17 @@ TEST_P(ManifestMeshes, GeneratorsMatchTheGenus) {
     }
   }
   EXPECT_EQ(generators, 2 * m.genus);
+  // Every generator also carried onto the input mesh and still non-contractible there (CGAL).
+  ASSERT_TRUE(r.has_input_loops);
+  ASSERT_EQ(r.input_loops.size(), r.loops.size());
+  SurfaceTopology input_topo(r.input_mesh.mesh);
+  for (const InputLoop& l : r.input_loops) {
+    if (l.loop.choke.kind != Kind::Generator) continue;
+    SCOPED_TRACE(std::string("input mesh: ") + to_string(l.loop.choke.side) + " generator");
+    ASSERT_TRUE(l.loop.found) << l.loop.note;
+    EXPECT_TRUE(l.verified);
+    EXPECT_FALSE(input_topo.contractible(l.loop.edge_path));
+  }
 }
 
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(ManifestMeshes);  // ManifestHasClosedMeshes reports missing data

@@ -73,6 +73,12 @@ TEST(CliArgs, MistakesExitWith2AndOneLineNamingTheOption) {
       {"persistence f.vdb g.vdb -o p.csv", "more than one input file given"},
       {"render out --width 3", "--width expects an integer in [16, 16384], got '3'"},
       {"view out --face-budget", "--face-budget needs a value"},
+      {"cut in.off", "usage: chokeloops cut INPUT OUTDIR -o OUTPUT"},
+      {"cut in.off out", "no output given (-o OUTPUT)"},
+      {"cut in.off out -o cut.off --ids 1,x", "--ids: 'x' is not a loop id"},
+      {"cut in.off out -o cut.off --side both", "--side must be handle or tunnel"},
+      {"cut in.off out -o cut.txt", "must end in .off, .ply, .obj or .stl"},
+      {"cut /nonexistent/in.off /nonexistent/out -o cut.off", "run chokeloops analyze"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);

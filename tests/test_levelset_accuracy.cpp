@@ -10,6 +10,7 @@
 
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
+#include "mesh_shapes.h"
 
 using namespace chokeloops;
 
@@ -51,24 +52,6 @@ TriangleMesh icosphere(double r, std::array<double, 3> c, int sub) {
   TriangleMesh m;
   for (auto& p : v) m.vertices.push_back({c[0] + r * p[0], c[1] + r * p[1], c[2] + r * p[2]});
   m.faces = f;
-  return m;
-}
-
-// Torus around z: major radius R, minor radius a, nu x nv quads split in two.
-TriangleMesh torus(double R, double a, int nu, int nv) {
-  TriangleMesh m;
-  const double pi = std::acos(-1.0);
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      double u = 2 * pi * i / nu, w = 2 * pi * j / nv;
-      m.vertices.push_back({(R + a * std::cos(w)) * std::cos(u), (R + a * std::cos(w)) * std::sin(u), a * std::sin(w)});
-    }
-  auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      m.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
   return m;
 }
 
@@ -140,7 +123,7 @@ TEST(LevelSetAccuracy, SphereAt128) {
 
 TEST(LevelSetAccuracy, TorusAt128) {
   const double R = 1.0, a = 0.4;
-  TriangleMesh m = torus(R, a, 720, 288);  // sagitta ~1e-3 voxel
+  TriangleMesh m = test::polyhedral_torus(R, a, 720, 288);  // sagitta ~1e-3 voxel
   LevelSetOptions o;
   o.resolution = 128;
   o.quiet = true;
@@ -178,7 +161,7 @@ TEST(LevelSetAccuracy, VoxelSizeAndMarginOptions) {
 
 TEST(LevelSetAccuracy, SameGridWhateverTheThreadCount) {
   // the feature transform and its relaxation run in parallel; the grid must not depend on the split
-  TriangleMesh m = torus(1.0, 0.4, 180, 72);
+  TriangleMesh m = test::polyhedral_torus(1.0, 0.4, 180, 72);
   LevelSetOptions o;
   o.resolution = 96;
   o.quiet = true;

@@ -43,6 +43,8 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
   --no-slide                shorten only; do not slide loops along tubes to the narrowest section
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
+  --no-input-loops          meshes: do not carry the loops onto the input mesh (input_loops.json,
+                            input_loops.ply; see chokeloops cut)
   --quiet                   no progress on stderr
   --max-loops N|all         trace loops for the N most persistent chokes only (default 20 for volumes,
                             all otherwise); the rest are counted
@@ -180,6 +182,7 @@ int run(std::vector<std::string> args) {
     else if (in.is("--no-shorten")) options.loops.shorten = false;
     else if (in.is("--no-slide")) options.loops.slide = false;
     else if (in.is("--no-check")) options.check_generators = false;
+    else if (in.is("--no-input-loops")) options.input_loops = false;
     else if (in.is("-q", "--quiet")) quiet = true;
     else if (in.is("--iso")) { vo.field.has_iso = true; vo.field.iso = in.number(); }
     else if (in.is("--inside")) {
@@ -297,7 +300,14 @@ int run(std::vector<std::string> args) {
   std::printf("time: levelset %.0f ms, persistence %.0f ms, surface %.0f ms, loops %.0f ms, check %.0f ms, report %.0f ms, total %.0f ms\n",
               r.timings_ms["levelset"], r.timings_ms["persistence"], r.timings_ms["surface"], r.timings_ms["loops"],
               r.timings_ms["check"], report_ms, r.timings_ms["total"] + report_ms);
-  std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json%s}%s%s\n", outdir.c_str(), view ? ",view.html" : "",
+  if (r.has_input_loops) {
+    int carried = 0;
+    for (auto& l : r.input_loops) carried += l.loop.found;
+    std::printf("input mesh: %d of %zu loop(s) carried and checked (%.0f ms)\n", carried, r.input_loops.size(),
+                r.timings_ms["input_loops"]);
+  }
+  std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json%s%s}%s%s\n", outdir.c_str(),
+              r.has_input_loops ? ",input_loops.json,input_loops.ply" : "", view ? ",view.html" : "",
               png.empty() ? "" : " and ", png.c_str());
   return 0;
 }

@@ -8,6 +8,7 @@
 #include "chokeloops/topology/chokes.h"
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/field/volume_field.h"
+#include "chokeloops/loops/input_loops.h"
 #include "chokeloops/loops/membranes.h"
 #include "chokeloops/topology/persistence.h"
 #include "chokeloops/surface/surface.h"
@@ -23,6 +24,9 @@ struct AnalyzeOptions {
   // Loops are traced for at most this many chokes (-1: all). Past it, the chokes are ranked by their
   // pair's persistence (death - birth, most persistent first) and the rest are counted, not traced.
   int max_loops = -1;
+  // Mesh inputs: every loop also carried onto the input mesh and checked there (input_loops.h), written as
+  // input_loops.json and input_loops.ply.
+  bool input_loops = true;
 };
 
 struct AnalyzeResult {
@@ -41,6 +45,9 @@ struct AnalyzeResult {
   int loops_omitted = 0;                  // chokes past AnalyzeOptions::max_loops (not traced)
   WorldFrame frame;                       // volumes: grid frame -> image world (applied when writing)
   std::string extra_json;                 // a JSON object whose fields are added to loops.json
+  bool has_input_loops = false;           // input_mesh and input_loops are set (mesh inputs)
+  InputMesh input_mesh;
+  std::vector<InputLoop> input_loops;     // one per loop, same order
 };
 
 // Runs every stage on a file (mesh or .vdb). Throws Error (2 bad input, 3 resources).
@@ -55,5 +62,14 @@ void write_report(const AnalyzeResult& result, const AnalyzeOptions& options, co
 
 // The text of loops.json (what write_report writes there), for callers that keep results in memory.
 std::string report_json(const AnalyzeResult& result, const AnalyzeOptions& options);
+
+// The text of input_loops.json (written beside loops.json when result.has_input_loops): the loops on the input
+// mesh with loops.json's fields, plus where each point lies on the input (vertex, or edge and face ids).
+std::string input_loops_json(const AnalyzeResult& result);
+
+// Carries result.loops onto the input mesh `input` (input_loops.h) and checks them there; sets
+// has_input_loops, input_mesh and input_loops, warns about loops that could not be carried, times it as
+// "input_loops". A mesh the carrying cannot use is a warning, not an error (loops.json stays valid).
+void add_input_loops(AnalyzeResult& result, const std::string& input);
 
 }  // namespace chokeloops

@@ -80,32 +80,6 @@ bool surrounded(const V3& x, const V3 c[3]) {
   return (s0 > -eps && s1 > -eps && s2 > -eps) || (s0 < eps && s1 < eps && s2 < eps);
 }
 
-void describe(Loop& loop) {
-  const auto& P = loop.points;
-  loop.length = closed_length(P);
-  V3 mean = V3::Zero();
-  for (auto& p : P) mean += v3(p);
-  mean /= double(P.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  double rmin = 1e300, rsum = 0;
-  for (auto& p : P) {
-    V3 d = v3(p) - mean;
-    cov += d * d.transpose();
-    rmin = std::min(rmin, d.norm());
-    rsum += d.norm();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  V3 n = eig.eigenvectors().col(0);
-  int big = 0;
-  for (int a = 1; a < 3; ++a)
-    if (std::abs(n[a]) > std::abs(n[big])) big = a;
-  if (n[big] < 0) n = -n;
-  loop.centroid = arr(mean);
-  loop.normal = arr(n);
-  loop.radius_min = rmin;
-  loop.radius_mean = rsum / double(P.size());
-}
-
 struct HalfPath {
   std::vector<V3> path;  // from next to the bottleneck outwards
   bool open = false;
@@ -245,7 +219,7 @@ Loop section_loop(const Choke& choke, const Polyline3& section, const SurfaceMes
       loop.edge_path.clear();
     }
   }
-  describe(loop);
+  describe_loop(loop);
   return loop;
 }
 

@@ -127,7 +127,7 @@ class LoopTracer {
     } else {
       loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
     }
-    describe(loop);
+    describe_loop(loop);
     if (debug_)
       std::fprintf(stderr, "membranes: %s %s depth %g: shortened/slid in %.0f ms\n", to_string(c.side), to_string(c.kind), c.depth,
                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_shorten).count());
@@ -150,7 +150,7 @@ class LoopTracer {
     // Small steps from the current best, repeated while they help, follow a tube that bends.
     double travelled = 0;
     for (int round = 0; round < 6 && travelled < reach; ++round) {
-      describe(probe);
+      describe_loop(probe);
       const auto n = probe.normal;
       const Polyline3 start = best.points;
       const double length_before = best.length;
@@ -225,33 +225,6 @@ class LoopTracer {
       v += w * g_.values[g_.index(q[0], q[1], q[2])];
     }
     return v;
-  }
-
-  static void describe(Loop& loop) {
-    const auto& P = loop.points;
-    loop.length = closed_length(P);
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (auto& p : P) mean += Eigen::Vector3d(p[0], p[1], p[2]);
-    mean /= double(P.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    double rmin = 1e300, rsum = 0;
-    for (auto& p : P) {
-      Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
-      cov += d * d.transpose();
-      rmin = std::min(rmin, d.norm());
-      rsum += d.norm();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    Eigen::Vector3d n = eig.eigenvectors().col(0);
-    // A sign convention makes the normal reproducible: its largest component is positive.
-    int big = 0;
-    for (int a = 1; a < 3; ++a)
-      if (std::abs(n[a]) > std::abs(n[big])) big = a;
-    if (n[big] < 0) n = -n;
-    loop.centroid = {mean[0], mean[1], mean[2]};
-    loop.normal = {n[0], n[1], n[2]};
-    loop.radius_min = rmin;
-    loop.radius_mean = rsum / double(P.size());
   }
 
   Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path) const {
@@ -400,6 +373,33 @@ class LoopTracer {
 };
 
 }  // namespace
+
+void describe_loop(Loop& loop) {
+  const auto& P = loop.points;
+  loop.length = closed_length(P);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (auto& p : P) mean += Eigen::Vector3d(p[0], p[1], p[2]);
+  mean /= double(P.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  double rmin = 1e300, rsum = 0;
+  for (auto& p : P) {
+    Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
+    cov += d * d.transpose();
+    rmin = std::min(rmin, d.norm());
+    rsum += d.norm();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);
+  // A sign convention makes the normal reproducible: its largest component is positive.
+  int big = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(n[a]) > std::abs(n[big])) big = a;
+  if (n[big] < 0) n = -n;
+  loop.centroid = {mean[0], mean[1], mean[2]};
+  loop.normal = {n[0], n[1], n[2]};
+  loop.radius_min = rmin;
+  loop.radius_mean = rsum / double(P.size());
+}
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology) {

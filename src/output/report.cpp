@@ -10,12 +10,38 @@ namespace chokeloops {
 
 namespace {
 nlohmann::json point(const std::array<double, 3>& p) { return nlohmann::json::array({p[0], p[1], p[2]}); }
+
+// One entry of loops.json's "loops" (input_loops.json's entries start from it too).
+nlohmann::json loop_json(const Loop& l, std::size_t id, const FreudenthalComplex& cx, const WorldFrame& wf) {
+  auto pos = [&](const std::array<double, 3>& p) { return wf.set ? wf.apply(p) : p; };
+  const Choke& c = l.choke;
+  nlohmann::json pts = nlohmann::json::array();
+  for (auto& p : l.points) pts.push_back(point(pos(p)));
+  auto sc = cx.coords(c.saddle);
+  return {{"id", id},
+          {"side", to_string(c.side)},
+          {"kind", to_string(c.kind)},
+          {"depth", c.depth},
+          {"persistence", c.persistence},
+          {"birth", c.birth},
+          {"death", c.death},
+          {"length", l.length},
+          {"choke_point", point(pos(c.point))},
+          {"centroid", point(pos(l.centroid))},
+          {"normal", point(wf.set ? wf.rotate(l.normal) : l.normal)},
+          {"radius_min", l.radius_min},
+          {"radius_mean", l.radius_mean},
+          {"raw_length", l.raw_length},
+          {"found", l.found},
+          {"note", l.note},
+          {"choke_simplex", {{"dim", c.simplex_dim}, {"id", c.simplex}, {"grid_vertex", {sc[0], sc[1], sc[2]}}}},
+          {"points", pts}};
+}
 }  // namespace
 
 std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
   // Volumes: every position is written in the image's world (mm, its convention), not the grid's frame.
   const WorldFrame& wf = r.frame;
-  auto pos = [&](const std::array<double, 3>& p) { return wf.set ? wf.apply(p) : p; };
   using nlohmann::json;
   json j;
   j["input"] = std::filesystem::path(r.input).filename().string();
@@ -52,31 +78,7 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
                  {"pairs", {r.diagram.count(0), r.diagram.count(1), r.diagram.count(2)}}};
   FreudenthalComplex cx(r.grid.dims);
   json loops = json::array();
-  for (std::size_t i = 0; i < r.loops.size(); ++i) {
-    const Loop& l = r.loops[i];
-    const Choke& c = l.choke;
-    json pts = json::array();
-    for (auto& p : l.points) pts.push_back(point(pos(p)));
-    auto sc = cx.coords(c.saddle);
-    loops.push_back({{"id", i},
-                     {"side", to_string(c.side)},
-                     {"kind", to_string(c.kind)},
-                     {"depth", c.depth},
-                     {"persistence", c.persistence},
-                     {"birth", c.birth},
-                     {"death", c.death},
-                     {"length", l.length},
-                     {"choke_point", point(pos(c.point))},
-                     {"centroid", point(pos(l.centroid))},
-                     {"normal", point(wf.set ? wf.rotate(l.normal) : l.normal)},
-                     {"radius_min", l.radius_min},
-                     {"radius_mean", l.radius_mean},
-                     {"raw_length", l.raw_length},
-                     {"found", l.found},
-                     {"note", l.note},
-                     {"choke_simplex", {{"dim", c.simplex_dim}, {"id", c.simplex}, {"grid_vertex", {sc[0], sc[1], sc[2]}}}},
-                     {"points", pts}});
-  }
+  for (std::size_t i = 0; i < r.loops.size(); ++i) loops.push_back(loop_json(r.loops[i], i, cx, wf));
   j["loops"] = loops;
   json hd = json::array(), td = json::array();
   for (auto& p : r.chokes.handle_diagram) hd.push_back({p[0], p[1]});
@@ -97,6 +99,47 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
   json timings = json::object();
   for (auto& kv : r.timings_ms) timings[kv.first] = std::round(kv.second * 10) / 10;
   j["timings_ms"] = timings;
+  return j.dump(1) + "\n";
+}
+
+std::string input_loops_json(const AnalyzeResult& r) {
+  using nlohmann::json;
+  json j;
+  j["input"] = std::filesystem::path(r.input).filename().string();
+  j["units"] = "input";
+  const MeshReport& m = r.input_mesh.report;
+  j["input_mesh"] = {{"vertices", r.input_mesh.mesh.vertices.size()}, {"faces", r.input_mesh.mesh.faces.size()},
+                     {"repaired", r.input_mesh.repaired}, {"closed", m.closed}, {"components", m.components},
+                     {"genus", m.genus}, {"euler", m.euler}};
+  int added = 0;
+  for (char a : r.input_mesh.added_face) added += a;
+  if (r.input_mesh.repaired) j["input_mesh"]["faces_added_by_repair"] = added;
+  FreudenthalComplex cx(r.grid.dims);
+  json loops = json::array();
+  int carried = 0;
+  double transfer_ms = 0;
+  for (std::size_t i = 0; i < r.input_loops.size(); ++i) {
+    const InputLoop& il = r.input_loops[i];
+    json e = loop_json(il.loop, i, cx, WorldFrame{});
+    e["grid_length"] = il.grid_length;
+    e["verified"] = il.verified;
+    if (il.verified)
+      e["check"] = il.loop.choke.kind == Kind::Generator ? "non-contractible" : il.separating ? "separating" : "non-separating";
+    e["edge_path"] = il.loop.edge_path;
+    json where = json::array();
+    for (const InputPoint& w : il.where) {
+      if (w.vertex >= 0) where.push_back({{"vertex", w.vertex}, {"face", w.face}});
+      else where.push_back({{"edge", {w.edge[0], w.edge[1]}}, {"t", w.t}, {"face", w.face}});
+    }
+    e["input_points"] = where;
+    loops.push_back(e);
+    carried += il.loop.found;
+    transfer_ms += il.transfer_ms;
+  }
+  j["counts"] = {{"loops", r.input_loops.size()}, {"carried", carried}};
+  j["loops"] = loops;
+  j["timings_ms"] = {{"input_loops", std::round((r.timings_ms.count("input_loops") ? r.timings_ms.at("input_loops") : 0) * 10) / 10},
+                     {"per_loop_sum", std::round(transfer_ms * 10) / 10}};
   return j.dump(1) + "\n";
 }
 
@@ -125,6 +168,15 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
   std::ofstream out(outdir + "/loops.json");
   out << report_json(r, options);
   if (!out) throw Error("cannot write '" + outdir + "/loops.json' (disk full?)");
+  if (r.has_input_loops) {
+    std::vector<Polyline3> on_input;
+    for (const InputLoop& l : r.input_loops)
+      if (l.loop.found) on_input.push_back(l.loop.points);
+    write_loops_ply(on_input, outdir + "/input_loops.ply");
+    std::ofstream in(outdir + "/input_loops.json");
+    in << input_loops_json(r);
+    if (!in) throw Error("cannot write '" + outdir + "/input_loops.json' (disk full?)");
+  }
 }
 
 }  // namespace chokeloops

@@ -197,6 +197,7 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   }
   warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
   r.warnings = warnings;
+  if (!is_vdb(input) && options.input_loops) add_input_loops(r, input);
   r.timings_ms["total"] = ms_since(t0);
   return r;
 }

@@ -38,6 +38,10 @@ struct Loop {
   double trace_ms = 0;             // wall time spent on this loop (a diagnostic for benchmarks; not reported)
 };
 
+// Length, centroid, best-fit plane normal (sign fixed: its largest component positive) and radii of
+// loop.points; every loop stage describes its loops with it.
+void describe_loop(Loop& loop);
+
 class SurfaceTopology;
 
 // Loops of all chokes, computed in parallel; the result does not depend on the thread count. With a
