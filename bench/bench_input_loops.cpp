@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/analyze.h"
 #include "chokeloops/loops/cut_mesh.h"
 
@@ -26,6 +27,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  chokeloops::restart_with_huge_pages(argv);
   int runs = 3, resolution = 256;
   std::string only, data = CHOKELOOPS_SOURCE_DIR "/data";
   for (int i = 1; i + 1 < argc; i += 2) {
