@@ -1,6 +1,8 @@
 // Tree-cotree homology basis (homology_basis.h).
 #include "homology_basis.h"
 
+#include "union_find.h"
+
 #include <algorithm>
 
 namespace chokeloops {
@@ -20,43 +22,33 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
   // Any spanning trees serve. Built by union-find over the edges in half-edge order, they read the mesh
   // front to back; a breadth-first search jumps across it, and on surfaces of millions of faces its cache
   // misses were most of the time.
-  std::vector<int> set(std::size_t(std::max(V, F)));
-  auto find = [&](int x) {
-    while (set[x] != x) x = set[x] = set[set[x]];
-    return x;
-  };
-  auto unite = [&](int a, int b) {
-    a = find(a), b = find(b);
-    if (a == b) return false;
-    set[std::max(a, b)] = std::min(a, b);
-    return true;
-  };
-  // Primal tree over the vertices.
-  for (int v = 0; v < V; ++v) set[v] = v;
-  for (int h = 0; h < 3 * F; ++h) {
-    const int t = adj.twin[h];
-    if (t < h || !in_basis(MeshAdjacency::face(h))) continue;
-    const auto& tri = mesh.faces[MeshAdjacency::face(h)];
-    if (unite(tri[h % 3], tri[(h + 1) % 3])) code_[h] = code_[t] = kTree;
+  {  // Primal tree over the vertices.
+    UnionFind vertices{std::size_t(V)};
+    for (int h = 0; h < 3 * F; ++h) {
+      const int t = adj.twin[h];
+      if (t < h || !in_basis(MeshAdjacency::face(h))) continue;
+      const auto& tri = mesh.faces[MeshAdjacency::face(h)];
+      if (vertices.unite(tri[h % 3], tri[(h + 1) % 3])) code_[h] = code_[t] = kTree;
+    }
   }
   // Cotree over the faces, through the edges not in the tree.
   constexpr std::int32_t kCotree = -3;
-  for (int f = 0; f < F; ++f) set[f] = f;
-  for (int h = 0; h < 3 * F; ++h) {
-    const int t = adj.twin[h];
-    if (t < h || code_[h] != kUnset || !in_basis(MeshAdjacency::face(h))) continue;
-    if (unite(MeshAdjacency::face(h), MeshAdjacency::face(t))) code_[h] = code_[t] = kCotree;
+  {
+    UnionFind faces{std::size_t(F)};
+    for (int h = 0; h < 3 * F; ++h) {
+      const int t = adj.twin[h];
+      if (t < h || code_[h] != kUnset || !in_basis(MeshAdjacency::face(h))) continue;
+      if (faces.unite(MeshAdjacency::face(h), MeshAdjacency::face(t))) code_[h] = code_[t] = kCotree;
+    }
   }
-  std::vector<int>().swap(set);
   // Each cotree rooted at its first face and numbered depth first; a cotree edge gets the code of the face
-  // below it.
+  // below it, which also keeps a child from walking back to its parent.
   std::vector<int> parent(F, -1), order, stack;
   order.reserve(std::size_t(F));
   std::int32_t counter = 0;
   for (int root = 0; root < F; ++root) {
     if (first_[root] >= 0 || !in_basis(root)) continue;
     stack.assign(1, root);
-    first_[root] = 0;  // marks it pushed
     while (!stack.empty()) {
       const int f = stack.back();
       stack.pop_back();
@@ -66,9 +58,7 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
         const int h = 3 * f + k;
         if (code_[h] != kCotree) continue;
         const int t = adj.twin[h], g = MeshAdjacency::face(t);
-        if (g == parent[f]) continue;
         parent[g] = f;
-        first_[g] = 0;
         code_[h] = code_[t] = 2 * g + 1;
         stack.push_back(g);
       }

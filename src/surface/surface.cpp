@@ -1,14 +1,13 @@
 #include "chokeloops/surface/surface.h"
 
 #include "halfedge_groups.h"
+#include "union_find.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 namespace chokeloops {
 
@@ -226,21 +225,6 @@ int surface_vertex_on_edge(const SurfaceMesh& mesh, Id edge) {
   auto it = std::lower_bound(mesh.vertex_edge.begin(), mesh.vertex_edge.end(), edge);
   return it != mesh.vertex_edge.end() && *it == edge ? int(it - mesh.vertex_edge.begin()) : -1;
 }
-
-namespace {
-struct UnionFind {
-  std::vector<int> p;
-  explicit UnionFind(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0); }
-  int find(int x) {
-    while (p[x] != x) x = p[x] = p[p[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) p[std::max(a, b)] = std::min(a, b);
-  }
-};
-}  // namespace
 
 int face_components(const SurfaceMesh& mesh, std::vector<int>& face_label) {
   UnionFind uf(mesh.vertices.size());
