@@ -133,7 +133,7 @@ void carry(const SurfaceMesh& m, const std::vector<char>& added, const MeshAdjac
     s.edge_path = path;
     s.points = loop_points(m, path);
   }
-  out.loop.raw_length = closed_length(loop_points(m, path));
+  out.loop.raw_length = loop_length(m, path);
   // The check runs on the edge loop; the shortened polyline is homotopic to it inside the shortening's band.
   // A choke is compared with itself on the marching surface: some chokes are deeper copies of a generator,
   // not separating.
