@@ -11,6 +11,7 @@
 
 #include "analytic_fields.h"
 #include "chokeloops/analyze.h"
+#include "chokeloops/loops/linking.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/topology.h"
 
@@ -123,6 +124,19 @@ void expect_valid_loops(const AnalyzeResult& r, bool chokes_separate = true) {
     if (l.choke.kind == Kind::Choke) EXPECT_LE(near, 2 * l.choke.depth + 4 * r.grid.voxel_size);
     if (l.choke.kind == Kind::Generator) EXPECT_FALSE(topo.contractible(l.edge_path));
     else if (chokes_separate) EXPECT_TRUE(topo.separates(l.edge_path));
+  }
+  // A handle loop bounds in the solid, a tunnel loop in the outside: it links no cycle of the other side
+  // (the cycles the other side's generator chokes close span that side's homology).
+  for (const Loop& l : r.loops) {
+    if (l.choke.kind != Kind::Generator) continue;
+    for (const Choke& c : r.chokes.chokes) {
+      if (c.kind != Kind::Generator || c.side == l.choke.side) continue;
+      const Polyline3 cycle = generator_cycle(r.grid, c);
+      ASSERT_GE(cycle.size(), 3u) << "no cycle for the " << to_string(c.side) << " generator at depth " << c.depth;
+      EXPECT_EQ(linking_number(l.points, cycle), std::optional<int>(0))
+          << to_string(l.choke.side) << " loop at depth " << l.choke.depth << " links the " << to_string(c.side)
+          << " cycle at depth " << c.depth;
+    }
   }
 }
 

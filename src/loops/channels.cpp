@@ -406,6 +406,24 @@ Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double
   return section_of(surface, FaceCells(surface, 2.0).near(surface, p, max_radius + 1), p, n, max_radius);
 }
 
+std::vector<Polyline3> cross_section_loops(const SurfaceMesh& surface, const std::vector<SectionPlane>& planes,
+                                           const std::vector<double>& radii) {
+  std::vector<Polyline3> out(planes.size());
+  if (planes.empty() || radii.empty()) return out;
+  double cell = 0;  // about a tenth of the smallest radius, so that `near` reads few faces beyond it
+  for (double r : radii) cell = cell == 0 ? r : std::min(cell, r);
+  double extent = 0;
+  for (const auto& v : surface.vertices)
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, std::abs(v[a] - surface.vertices[0][a]));
+  const FaceCells cells(surface, std::max({cell / 4, extent / 128, 1e-9}));
+  for (std::size_t i = 0; i < planes.size(); ++i)
+    for (double r : radii) {
+      out[i] = section_of(surface, cells.near(surface, planes[i].point, r + 1e-9), planes[i].point, planes[i].normal, r);
+      if (!out[i].empty()) break;
+    }
+  return out;
+}
+
 namespace {
 // On a bumpy wall with gaps between atoms the plane normal to the axis can leak out through a gap; planes
 // tilted up to 40 degrees are tried too and the shortest closed curve around the bottleneck is kept.

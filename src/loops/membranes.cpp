@@ -20,8 +20,10 @@
 // that is not null in Z/2 homology (SurfaceTopology::null_homologous, one face flood) is taken. On a flat core (the
 // cup's thin wall at 256^3) the filtration order lets one zone enclose the other and every curve of the
 // membrane is contractible, in every box; the same box is then flooded by distance from the seeds (the
-// interface is their bisector, a straight cut across the wall), which gives a valid loop. CHOKELOOPS_DEBUG_MEMBRANES=1
-// traces the choice on stderr.
+// interface is their bisector, a straight cut across the wall), which gives a valid loop. Non-contractible is
+// not enough: a curve must also bound on the choke's side, i.e. link no cycle of the other side's generators
+// (generator_class.h); where no interface curve does, the plane sections of generator_class.h are tried.
+// CHOKELOOPS_DEBUG_MEMBRANES=1 traces the choice on stderr.
 #include "chokeloops/loops/membranes.h"
 
 #include <tbb/parallel_for.h>
@@ -37,6 +39,7 @@
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
+#include "generator_class.h"
 #include "two_lobe_flood.h"
 
 namespace chokeloops {
@@ -65,11 +68,12 @@ enum class Attempt { Found, Grow, GrowContractible, Shrink };
 
 class LoopTracer {
  public:
-  LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology* topology)
-      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency), T_(topology),
+  LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology* topology,
+             const std::array<std::vector<const detail::SideCycle*>, 2>* generator_cycles)
+      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency), T_(topology), other_cycles_(generator_cycles),
         debug_(std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr) {}
 
-  Loop trace(const Choke& c, const LoopOptions& options) const {
+  Loop trace(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle) const {
     Loop loop;
     loop.choke = c;
     const double h = g_.voxel_size;
@@ -77,6 +81,12 @@ class LoopTracer {
     const int r0 = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
     const int seed_r0 = int(std::ceil(c.depth / h)) + options.box_margin;
     bool only_contractible = false;
+    // A generator's loop must bound on its own side: it links no cycle of the other side (linking.h).
+    CurveCheck check;
+    if (c.kind == Kind::Generator && T_ && other_cycles_) {
+      check.other_side = &(*other_cycles_)[c.side == Side::Handle ? 1 : 0];
+      check.own = own_cycle;
+    }
     Polyline3 raw;
     std::vector<int> raw_path;  // raw snapped to surface edges, when try_box already did it
     // A generator whose every interface curve near the choke is contractible sits on a flat core (a thin
@@ -87,13 +97,13 @@ class LoopTracer {
     int r = r0, seed_r = seed_r0;
     for (int attempt = 0; attempt < 16; ++attempt) {
       auto t_box = std::chrono::steady_clock::now();
-      Attempt a = try_box(c, r, seed_r, false, raw, raw_path);
+      Attempt a = try_box(c, r, seed_r, false, raw, raw_path, check);
       if (debug_)
         std::fprintf(stderr, "membranes: %s %s depth %g box %d seed %d: attempt %d, %.0f ms\n", to_string(c.side), to_string(c.kind),
                      c.depth, r, seed_r, int(a), std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_box).count());
       if (a == Attempt::GrowContractible) {
         only_contractible = true;
-        a = try_box(c, r, seed_r, true, raw, raw_path);
+        a = try_box(c, r, seed_r, true, raw, raw_path, check);
       }
       if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
       if (a == Attempt::Grow || a == Attempt::GrowContractible) {
@@ -107,8 +117,17 @@ class LoopTracer {
         seed_r = seed_r * 2 / 3;
       }
     }
+    if (!loop.found && check.other_side &&
+        detail::generator_section_loop(g_, S_, A_, *T_, c, *check.other_side, check.own, raw, raw_path, debug_)) {
+      loop.found = true;
+      loop.note = "the membrane's interface gave no curve that bounds on its side (a flat core, e.g. a thin wall): the loop is the "
+                  "shortest plane section, through the choke or square to its cycle, that is essential, links no cycle of the other "
+                  "side and links its own cycle once";
+    }
     if (!loop.found) {
-      loop.note = only_contractible
+      loop.note = check.rejected ? "every essential interface curve of the membrane near the choke links a cycle of the other side: "
+                                   "none bounds on its own side, so none is reported"
+                  : only_contractible
                       ? "every interface curve of the membrane near the choke is contractible on the surface (a flat core, e.g. a thin wall)"
                       : "the membrane did not close on the surface near the choke";
       return loop;
@@ -227,7 +246,14 @@ class LoopTracer {
     return v;
   }
 
-  Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path) const {
+  struct CurveCheck {
+    const std::vector<const detail::SideCycle*>* other_side = nullptr;  // null: not checked
+    const detail::SideCycle* own = nullptr;                              // the choke's own cycle, if it could be made
+    bool rejected = false;  // an essential curve was turned down because it links one of them
+  };
+
+  Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path,
+                  CurveCheck& check) const {
     const bool handle = c.side == Side::Handle;
     auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
     detail::FloodBox box;
@@ -356,6 +382,17 @@ class LoopTracer {
                      to_string(c.side), c.depth, r, i + 1, candidates.size(), candidates[i].distance,
                      candidates[i].curve.size(), contractible ? "null-homologous" : "essential");
       if (contractible) continue;
+      // Essential on the surface, but it need not bound on the choke's side: the rim of a membrane spread
+      // along a thin wall goes around the tunnel beside it (seen on a cup's wall), and links that tunnel's
+      // cycle. A curve that bounds in the solid (the outside) links no cycle of the outside (the solid).
+      if (check.other_side) {
+        const int k = detail::linked_cycle(candidates[i].curve, *check.other_side);
+        if (debug_) std::fprintf(stderr, "membranes:   links other-side cycle %d\n", k);
+        if (k >= 0) {
+          check.rejected = true;
+          continue;
+        }
+      }
       out = std::move(candidates[i].curve);
       out_path = std::move(path);
       return Attempt::Found;
@@ -369,6 +406,7 @@ class LoopTracer {
   const SurfaceMesh& S_;
   const MeshAdjacency& A_;
   SurfaceTopology* T_;  // null: generators are not checked while their curve is chosen
+  const std::array<std::vector<const detail::SideCycle*>, 2>* other_cycles_ = nullptr;  // [handle, tunnel] generator cycles
   bool debug_;
 };
 
@@ -403,14 +441,17 @@ void describe_loop(Loop& loop) {
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology) {
-  LoopTracer tracer(grid, surface, adjacency, topology);
+  // Every generator's cycle, once: each generator's loop is checked against the other side's.
+  detail::GeneratorCycles cycles;
+  if (topology) detail::make_generator_cycles(grid, chokes, cycles);
+  LoopTracer tracer(grid, surface, adjacency, topology, topology ? &cycles.by_side : nullptr);
   std::vector<Loop> loops(chokes.size());
   // One choke whose loop cannot be made (e.g. a membrane interface spanning two surface components of a
   // raw segmentation) is reported without a loop; it does not stop the others.
   tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      loops[i] = tracer.trace(chokes[i], options);
+      loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr);
     } catch (const Error& e) {
       loops[i] = Loop{};
       loops[i].choke = chokes[i];

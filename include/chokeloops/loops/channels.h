@@ -86,4 +86,12 @@ bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& 
 Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
                              double max_radius);
 
+// The same for many planes over one bucketing of the surface's faces: for each plane the first of `radii`
+// (ascending) within which such a curve closes is used.
+struct SectionPlane {
+  std::array<double, 3> point, normal;
+};
+std::vector<Polyline3> cross_section_loops(const SurfaceMesh& surface, const std::vector<SectionPlane>& planes,
+                                           const std::vector<double>& radii);
+
 }  // namespace chokeloops

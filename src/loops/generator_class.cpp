@@ -1,0 +1,137 @@
+// Generator loops in their side's class (generator_class.h): the cycles, the linking test, the plane sections.
+#include "generator_class.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "chokeloops/loops/channels.h"
+#include "chokeloops/loops/linking.h"
+#include "chokeloops/loops/shorten.h"
+#include "chokeloops/surface/topology.h"
+
+namespace chokeloops::detail {
+
+void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& chokes, GeneratorCycles& out) {
+  std::vector<std::size_t> generators;
+  for (std::size_t i = 0; i < chokes.size(); ++i)
+    if (chokes[i].kind == Kind::Generator) generators.push_back(i);
+  out.storage.assign(generators.size(), SideCycle{});
+  out.by_side = {};
+  out.own.assign(chokes.size(), nullptr);
+  tbb::parallel_for(std::size_t(0), generators.size(), [&](std::size_t k) {
+    SideCycle& z = out.storage[k];
+    z.points = generator_cycle(grid, chokes[generators[k]]);
+    z.lo = {1e300, 1e300, 1e300};
+    z.hi = {-1e300, -1e300, -1e300};
+    for (const auto& p : z.points)
+      for (int a = 0; a < 3; ++a) z.lo[a] = std::min(z.lo[a], p[a]), z.hi[a] = std::max(z.hi[a], p[a]);
+  });
+  const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
+  for (std::size_t k = 0; k < generators.size(); ++k) {
+    const Choke& c = chokes[generators[k]];
+    if (debug)
+      std::fprintf(stderr, "membranes: %s generator depth %g: cycle of %zu points\n", to_string(c.side), c.depth, out.storage[k].points.size());
+    if (out.storage[k].points.empty()) continue;
+    out.by_side[c.side == Side::Handle ? 0 : 1].push_back(&out.storage[k]);
+    out.own[generators[k]] = &out.storage[k];
+  }
+}
+
+int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles) {
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& p : curve)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  for (std::size_t k = 0; k < cycles.size(); ++k) {
+    const SideCycle& z = *cycles[k];
+    bool apart = false;  // a plane between the two boxes: they cannot link
+    for (int a = 0; a < 3; ++a) apart |= z.hi[a] < lo[a] || z.lo[a] > hi[a];
+    if (apart) continue;
+    const auto lk = linking_number(curve, z.points);
+    if (lk && *lk != 0) return int(k);
+  }
+  return -1;
+}
+
+bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                            SurfaceTopology& topology, const Choke& c, const std::vector<const SideCycle*>& other_side,
+                            const SideCycle* own, Polyline3& out, std::vector<int>& out_path, bool debug) {
+  std::vector<SectionPlane> planes;
+  constexpr int kDirections = 48;  // a Fibonacci spiral over the half sphere
+  for (int k = 0; k < kDirections; ++k) {
+    const double z = 1 - (k + 0.5) / kDirections, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
+    planes.push_back({c.point, {rho * std::cos(phi), rho * std::sin(phi), z}});
+  }
+  std::array<double, 3> lo = grid.origin, hi;
+  for (int a = 0; a < 3; ++a) hi[a] = grid.origin[a] + grid.h(a) * (grid.dims[a] - 1);
+  if (own) {
+    const Polyline3& P = own->points;
+    const std::size_t n = P.size(), step = std::max<std::size_t>(1, n / 48);
+    for (std::size_t i = 0; i < n; i += step) {
+      bool in_grid = true;
+      for (int a = 0; a < 3; ++a) in_grid &= P[i][a] >= lo[a] && P[i][a] <= hi[a];
+      if (!in_grid) continue;  // the part of a tunnel's cycle that goes round the outside of the grid
+      const auto& p0 = P[(i + n - 2) % n];
+      const auto& p1 = P[(i + 2) % n];
+      Eigen::Vector3d t(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+      if (t.norm() == 0) continue;
+      t.normalize();
+      Eigen::Vector3d e1 = std::abs(t[0]) < 0.9 ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 1, 0);
+      e1 = (e1 - e1.dot(t) * t).normalized();
+      const Eigen::Vector3d e2 = t.cross(e1);
+      planes.push_back({P[i], {t[0], t[1], t[2]}});
+      for (int q = 0; q < 4; ++q) {  // tilted by 25 degrees: a bend of the cycle need not be square to the neck
+        const Eigen::Vector3d m = std::cos(0.436) * t + std::sin(0.436) * (std::cos(q * M_PI / 2) * e1 + std::sin(q * M_PI / 2) * e2);
+        planes.push_back({P[i], {m[0], m[1], m[2]}});
+      }
+    }
+  }
+  double reach = 0;
+  for (int a = 0; a < 3; ++a) reach += std::pow(hi[a] - lo[a], 2);
+  const double h = grid.voxel_size;
+  // Radius by radius: a curve that closes only beyond radius r is longer than 2r, so a passing curve no
+  // longer than that ends the search (wide sections over the whole surface are what cost here).
+  std::vector<char> done(planes.size(), 0);
+  double best_length = 1e300;
+  for (double radius : {6 * c.depth + 6 * h, 24 * c.depth + 12 * h, std::sqrt(reach)}) {
+    std::vector<SectionPlane> open;
+    std::vector<std::size_t> index;
+    for (std::size_t i = 0; i < planes.size(); ++i)
+      if (!done[i]) open.push_back(planes[i]), index.push_back(i);
+    std::vector<Polyline3> sections = cross_section_loops(surface, open, {radius});
+    std::vector<std::pair<double, std::size_t>> order;
+    for (std::size_t i = 0; i < sections.size(); ++i)
+      if (sections[i].size() >= 3) order.push_back({closed_length(sections[i]), i}), done[index[i]] = 1;
+    std::stable_sort(order.begin(), order.end());
+    for (const auto& [length, i] : order) {
+      std::vector<int> path;
+      try {
+        path = snap_polyline_to_edge_path(surface, adjacency, sections[i]);
+      } catch (const Error&) {
+        continue;
+      }
+      if (path.size() < 3 || topology.null_homologous(path) || linked_cycle(sections[i], other_side) >= 0) continue;
+      if (own) {
+        const auto lk = linking_number(sections[i], own->points);
+        if (!lk || *lk % 2 == 0) continue;
+      }
+      if (debug)
+        std::fprintf(stderr, "membranes: %s generator depth %g: plane section %g long (plane %zu of %zu, radius %g)\n", to_string(c.side),
+                     c.depth, length, index[i], planes.size(), radius);
+      if (length < best_length) {
+        best_length = length;
+        out = std::move(sections[i]);
+        out_path = std::move(path);
+      }
+      break;
+    }
+    if (best_length <= 2 * radius) return true;  // a wider radius holds no shorter one
+  }
+  return best_length < 1e300;
+}
+
+}  // namespace chokeloops::detail

@@ -1,0 +1,46 @@
+#pragma once
+// Private to src/loops: whether a generator's candidate loop is in its side's class, and the plane sections
+// tried when the membrane gives none. A handle loop bounds in the solid, a tunnel loop in the outside; the
+// cycles the generator chokes of one side close span that side's homology (linking.h), so a curve bounds
+// on its side exactly when it links none of the other side's cycles.
+#include <array>
+#include <vector>
+
+#include "chokeloops/grid.h"
+#include "chokeloops/surface/mesh_adjacency.h"
+#include "chokeloops/surface/surface.h"
+#include "chokeloops/topology/chokes.h"
+
+namespace chokeloops {
+class SurfaceTopology;
+}
+
+namespace chokeloops::detail {
+
+// The cycle a generator's choke closes, with its bounding box.
+struct SideCycle {
+  Polyline3 points;
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+};
+
+// The cycles of every generator among `chokes`, made in parallel: by_side[0] the handles', [1] the
+// tunnels'; own[i] is choke i's (null when it is not a generator or its cycle cannot be made).
+struct GeneratorCycles {
+  std::vector<SideCycle> storage;
+  std::array<std::vector<const SideCycle*>, 2> by_side;
+  std::vector<const SideCycle*> own;
+};
+void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& chokes, GeneratorCycles& out);
+
+// Index in `cycles` of the first one `curve` links, or -1 (boxes apart are skipped: they cannot link).
+int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles);
+
+// The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
+// point in 48 directions, and by planes square to the choke's own cycle along it (and tilted by 25
+// degrees), that wind around their point; the shortest that is essential on the surface, links none of
+// `other_side` and links `own` (when given) an odd number of times. False when none does.
+bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                            SurfaceTopology& topology, const Choke& c, const std::vector<const SideCycle*>& other_side,
+                            const SideCycle* own, Polyline3& out, std::vector<int>& out_path, bool debug);
+
+}  // namespace chokeloops::detail
