@@ -1,6 +1,6 @@
 // `chokeloops analyze MODEL -o OUTDIR --png FILE` on a real model: view.html is written, and the picture
 // shows the surface and every kind of loop the analysis drew (counted by colour), and no colour of a kind
-// it did not draw.
+// it did not draw; the page switches to the input mesh and the loops carried onto it.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -65,5 +65,10 @@ TEST(ViewAnalyze, PngOfAModelShowsEachKindOfLoopItFound) {
     else EXPECT_LT(n.get<int>(), 50) << "colour of " << kind << " loops, but there are none: " << counts;
   }
   EXPECT_GT(j["surface"].get<int>(), 1200 * 900 / 20) << counts;
+
+  // The same page shows the input mesh with the loops carried onto it (input_mesh.ply, input_loops.json).
+  ASSERT_TRUE(fs::exists(out / "r/input_mesh.ply"));
+  std::string page = run_cmd("node '" + (viewer / "tests/check-input-view.mjs").string() + "' '" + (out / "r").string() + "'", code);
+  EXPECT_EQ(code, 0) << page;
   if (!std::getenv("CHOKELOOPS_KEEP_TEST_OUTPUT")) fs::remove_all(out);
 }

@@ -44,7 +44,7 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --no-input-loops          meshes: do not carry the loops onto the input mesh (input_loops.json,
-                            input_loops.ply; see chokeloops cut)
+                            input_loops.ply, input_mesh.ply; see chokeloops cut)
   --quiet                   no progress on stderr
   --max-loops N|all         trace loops for the N most persistent chokes only (default 20 for volumes,
                             all otherwise); the rest are counted
@@ -104,20 +104,6 @@ class Progress {
   std::string last_;
 };
 
-std::vector<std::string> split_list(const std::string& v) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : v + ",") {
-    if (c == ',') {
-      if (!cur.empty()) out.push_back(cur);
-      cur.clear();
-    } else if (c != ' ') {
-      cur += c;
-    }
-  }
-  return out;
-}
-
 int run(std::vector<std::string> args) {
   AnalyzeOptions options;
   MoleculeOptions molecule;
@@ -132,10 +118,10 @@ int run(std::vector<std::string> args) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
     else if (in.is("-o", "--output")) outdir = in.value();
     else if (in.is("--model")) molecule.read.model = int(in.integer(1, 1000000)), molecule_flags.push_back("--model");
-    else if (in.is("--chains")) molecule.read.chains = split_list(in.value()), molecule_flags.push_back("--chains");
+    else if (in.is("--chains")) molecule.read.chains = cli::split_list(in.value()), molecule_flags.push_back("--chains");
     else if (in.is("--assembly")) molecule.read.assembly = in.value(), molecule_flags.push_back("--assembly");
     else if (in.is("--ignore")) {
-      molecule.read.ignore = split_list(in.value());
+      molecule.read.ignore = cli::split_list(in.value());
       molecule.read.ignore_set = true;
       molecule_flags.push_back("--ignore");
     } else if (in.is("--radii")) {
@@ -307,7 +293,7 @@ int run(std::vector<std::string> args) {
                 r.timings_ms["input_loops"]);
   }
   std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json%s%s}%s%s\n", outdir.c_str(),
-              r.has_input_loops ? ",input_loops.json,input_loops.ply" : "", view ? ",view.html" : "",
+              r.has_input_loops ? ",input_loops.json,input_loops.ply,input_mesh.ply" : "", view ? ",view.html" : "",
               png.empty() ? "" : " and ", png.c_str());
   return 0;
 }

@@ -173,6 +173,8 @@ void write_report(const AnalyzeResult& r, const AnalyzeOptions& options, const s
     for (const InputLoop& l : r.input_loops)
       if (l.loop.found) on_input.push_back(l.loop.points);
     write_loops_ply(on_input, outdir + "/input_loops.ply");
+    // The mesh the input loops' ids refer to (the file's triangles, or their repair): view.html shows it.
+    write_ply(r.input_mesh.mesh, outdir + "/input_mesh.ply");
     std::ofstream in(outdir + "/input_loops.json");
     in << input_loops_json(r);
     if (!in) throw Error("cannot write '" + outdir + "/input_loops.json' (disk full?)");

@@ -399,6 +399,36 @@ void write_view_html(const std::string& outdir, std::size_t face_budget) {
   data["mesh"] = {{"source_vertices", source_vertices}, {"source_faces", source_faces},
                   {"display_vertices", mesh.vertices.size()}, {"display_faces", mesh.faces.size()},
                   {"decimated", cell > 0}, {"cell_size", cell}, {"face_budget", face_budget}};
+  // A mesh input's loops on its own triangles (input_loops.json on input_mesh.ply): the page can show those
+  // instead of the marching surface's.
+  TriMesh input_mesh;
+  fs::path input_json = dir / "input_loops.json", input_ply = dir / "input_mesh.ply";
+  if (fs::exists(input_json) && fs::exists(input_ply)) {
+    nlohmann::json input;
+    try {
+      input = nlohmann::json::parse(read_file(input_json, "the input loops written by analyze"));
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(input_json.string() + " is not valid JSON: " + e.what());
+    }
+    if (!input.is_object() || !input.contains("loops") || !input["loops"].is_array())
+      throw Error(input_json.string() + ": expected an object with a \"loops\" array");
+    for (const auto& l : input["loops"])
+      if (!l.is_object() || !l.contains("points") || !l["points"].is_array())
+        throw Error(input_json.string() + ": every loop needs a \"points\" array");
+    input_mesh = view_detail::read_ply(input_ply.string());
+    const std::size_t faces = input_mesh.faces.size(), vertices = input_mesh.vertices.size();
+    const double input_cell = face_budget == 0 ? 0.0 : view_detail::decimate(input_mesh, face_budget);
+    nlohmann::json loops = nlohmann::json::array();
+    for (auto& l : input["loops"]) {  // the page needs what loops.json has, not the ids on the input
+      l.erase("input_points");
+      l.erase("edge_path");
+      loops.push_back(std::move(l));
+    }
+    data["input_view"] = {{"loops", std::move(loops)},
+                          {"mesh", {{"source_vertices", vertices}, {"source_faces", faces}, {"display_vertices", input_mesh.vertices.size()},
+                                    {"display_faces", input_mesh.faces.size()}, {"decimated", input_cell > 0}, {"cell_size", input_cell},
+                                    {"face_budget", face_budget}}}};
+  }
   std::string title = data["report"].value("input", std::string("analysis"));
   if (!data["report"]["input"].is_string()) title = "analysis";
 
@@ -409,11 +439,14 @@ void write_view_html(const std::string& outdir, std::size_t face_budget) {
       {"DATA", script_safe_json(data)},
       {"POSITIONS", base64(mesh.vertices.data(), mesh.vertices.size() * 12)},  // little-endian float32
       {"INDICES", base64(mesh.faces.data(), mesh.faces.size() * 12)},          // little-endian uint32
+      {"INPUT_POSITIONS", base64(input_mesh.vertices.data(), input_mesh.vertices.size() * 12)},
+      {"INPUT_INDICES", base64(input_mesh.faces.data(), input_mesh.faces.size() * 12)},
       {"BUNDLE", script_safe_js(view_detail::kViewerBundle)},
   };
   std::string html;
   std::string_view t = view_detail::kViewerTemplate;
-  html.reserve(t.size() + fill["POSITIONS"].size() + fill["INDICES"].size() + fill["BUNDLE"].size() + fill["DATA"].size());
+  html.reserve(t.size() + fill["POSITIONS"].size() + fill["INDICES"].size() + fill["INPUT_POSITIONS"].size() +
+               fill["INPUT_INDICES"].size() + fill["BUNDLE"].size() + fill["DATA"].size());
   for (std::size_t p = 0;;) {
     std::size_t a = t.find("{{", p);
     std::size_t b = a == std::string_view::npos ? a : t.find("}}", a);

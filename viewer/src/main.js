@@ -17,7 +17,7 @@ const HIDDEN = 0.55;  // opacity of the parts of loops behind the surface
 const state = {
   ready: false, webgl: false, rendered: false, renderMode: false,
   loopCount: 0, selectedLoop: null, profileLoop: null, surfaceOpacity: 1,
-  displayFaces: 0, sourceFaces: 0, decimated: false,
+  displayFaces: 0, sourceFaces: 0, decimated: false, surfaceKind: 'marching', hasInputMesh: false,
   sort: { key: 'persistence', dir: 'desc' }, errors: [],
 };
 window.chokeloopsView = state;
@@ -117,17 +117,33 @@ function pullTowardCamera(material, pull) {
 
 function readData() {
   const data = JSON.parse(document.getElementById('chokeloops-data').textContent);
-  const pos = new Float32Array(decodeBase64(document.getElementById('chokeloops-positions').textContent));
-  const idx = new Uint32Array(decodeBase64(document.getElementById('chokeloops-indices').textContent));
-  return { data, pos, idx };
+  const bytes = (id) => { const el = document.getElementById(id); return el ? decodeBase64(el.textContent) : new ArrayBuffer(0); };
+  const pos = new Float32Array(bytes('chokeloops-positions'));
+  const idx = new Uint32Array(bytes('chokeloops-indices'));
+  const inputPos = new Float32Array(bytes('chokeloops-input-positions'));
+  const inputIdx = new Uint32Array(bytes('chokeloops-input-indices'));
+  return { data, pos, idx, inputPos, inputIdx };
 }
 
 function main() {
   state.renderMode = /(^|[#&?])render\b/.test(location.hash + location.search);
   if (state.renderMode) document.body.classList.add('render');
-  const { data, pos, idx } = readData();
-  const report = data.report || {};
-  const mesh = data.mesh || {};
+  const read = readData();
+  const data = read.data;
+  // A mesh input's page also holds the input mesh and its loops (input_loops.json); view.html#input shows
+  // those instead of the marching surface's.
+  const input = data.input_view && Array.isArray(data.input_view.loops) && read.inputIdx.length >= 3 ? data.input_view : null;
+  state.hasInputMesh = !!input;
+  const showInput = !!input && /(^|[#&])input\b/.test(location.hash);
+  state.surfaceKind = showInput ? 'input' : 'marching';
+  const pos = showInput ? read.inputPos : read.pos;
+  const idx = showInput ? read.inputIdx : read.idx;
+  const mesh = (showInput ? input.mesh : data.mesh) || {};
+  let report = data.report || {};
+  if (showInput) {
+    report = { ...report, loops: input.loops,
+      surface: { ...(report.surface || {}), vertices: mesh.source_vertices, faces: mesh.source_faces } };
+  }
   const loops = (report.loops || []).filter((l) => l && Array.isArray(l.points));
   loops.forEach((l, i) => {
     if (typeof l.id !== 'number' || !isFinite(l.id)) l.id = i;
@@ -464,6 +480,8 @@ function buildPanel(panel, report, mesh, loops, viewer) {
   const surf = report.surface || {};
   const params = report.parameters || {};
   panel.append($('h1', { text: `chokeloops: ${report.input ?? 'analysis'}` }));
+  panel.append($('div', { class: 'muted', 'data-testid': 'surface-kind', 'data-kind': state.surfaceKind,
+    text: state.surfaceKind === 'input' ? 'loops on the input mesh (input_loops.json)' : 'loops on the marching surface of the grid (loops.json)' }));
   const count = $('span', { 'data-testid': 'loop-count', 'data-count': String(loops.length), text: String(loops.length) });
   const missing = loops.filter((l) => l.points.length < 2).length;
   panel.append($('div', {}, count, ` loop${loops.length === 1 ? '' : 's'}${missing ? ` (${missing} without a polyline)` : ''} · genus ${surf.genus ?? '?'} · ${surf.components ?? '?'} component(s)`));
@@ -495,7 +513,13 @@ function buildPanel(panel, report, mesh, loops, viewer) {
       viewer.renderNow();
       const a = $('a', { href: document.getElementById('canvas').toDataURL('image/png'), download: `${String(report.input ?? 'chokeloops').replace(/[^\w.-]+/g, '_')}-loops.png` });
       document.body.append(a); a.click(); a.remove();
-    } }, 'save PNG')));
+    } }, 'save PNG'),
+    state.hasInputMesh ? $('button', { type: 'button', 'data-testid': 'surface-toggle', onclick: () => {
+      const rest = location.hash.replace(/^#/, '').split('&').filter((p) => p && p !== 'input');
+      if (state.surfaceKind !== 'input') rest.unshift('input');
+      location.hash = rest.join('&');
+      location.reload();
+    } }, state.surfaceKind === 'input' ? 'show the marching surface' : 'show the input mesh') : null));
   panel.append($('div', { class: 'muted', style: 'margin-top:4px', text: 'Drag to rotate, scroll to zoom, right-drag to pan; click a loop, a row or a diagram point to select it.' }));
 
   // Table of loops.
