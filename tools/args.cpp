@@ -7,6 +7,20 @@
 
 namespace chokeloops::cli {
 
+std::vector<std::string> split_list(const std::string& value) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : value + ",") {
+    if (c == ',') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else if (c != ' ') {
+      cur += c;
+    }
+  }
+  return out;
+}
+
 std::string Args::value() {
   if (i_ + 1 >= args_.size()) throw Error("option " + arg() + " needs a value (" + see_help() + ")");
   return args_[++i_];

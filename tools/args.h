@@ -9,6 +9,9 @@
 
 namespace chokeloops::cli {
 
+// The items of a comma-separated option value, spaces and empty items dropped ("A, B,,C" -> A B C).
+std::vector<std::string> split_list(const std::string& value);
+
 class Args {
  public:
   Args(std::string command, std::vector<std::string> args) : command_(std::move(command)), args_(std::move(args)) {}

@@ -1,7 +1,6 @@
 // `chokeloops cut INPUT OUTDIR -o OUTPUT`: cuts the input mesh along its loops and caps the cuts (cut_mesh.h);
 // a thin layer.
 #include <cstdio>
-#include <sstream>
 
 #include "chokeloops/grid.h"
 #include "chokeloops/loops/cut_mesh.h"
@@ -27,8 +26,7 @@ Exit codes: 0 success, 2 bad input or impossible request, 3 out of resources, 4 
 
 std::vector<int> parse_ids(const std::string& text) {
   std::vector<int> ids;
-  std::stringstream ss(text);
-  for (std::string item; std::getline(ss, item, ',');) {
+  for (const std::string& item : cli::split_list(text)) {
     std::size_t used = 0;
     long v = -1;
     try {
@@ -36,7 +34,7 @@ std::vector<int> parse_ids(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (item.empty() || used != item.size() || v < 0 || v > (1L << 30)) throw Error("--ids: '" + item + "' is not a loop id");
+    if (used != item.size() || v < 0 || v > (1L << 30)) throw Error("--ids: '" + item + "' is not a loop id");
     ids.push_back(int(v));
   }
   if (ids.empty()) throw Error("--ids needs at least one loop id");
