@@ -11,6 +11,7 @@
 
 #include "analytic_fields.h"
 #include "chokeloops/analyze.h"
+#include "chokeloops/loops/cut_mesh.h"
 #include "chokeloops/loops/linking.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/topology.h"
@@ -249,6 +250,24 @@ TEST(AnalyzeAnalytic, SameReportWithOneAndTwoThreads) {
   std::string one = report_with_threads(field, 1), two = report_with_threads(field, 2);
   EXPECT_GT(one.size(), 1000u);
   EXPECT_TRUE(one == two);
+}
+
+TEST(AnalyzeAnalytic, PiercedBlockHandleLoopsCutItToOneSphere) {
+  // A block pierced by 6 holes of several radii: each handle loop bounds in the solid, so cutting the surface
+  // along all of them leaves one sphere. Non-contractibility alone let two of them be curves around a hole
+  // (the rims of membranes spread along a thin wall): the cut then left genus 2 in two pieces.
+  AnalyzeResult r = analyze_grid(sample_field({128, 128, 128}, analytic::pierced_block(6, 7)), AnalyzeOptions{});
+  ASSERT_EQ(r.surface_stats.genus, 6);
+  expect_valid_loops(r);
+  std::vector<std::vector<int>> handles;
+  for (const Loop& l : r.loops)
+    if (l.choke.kind == Kind::Generator && l.choke.side == Side::Handle) handles.push_back(l.edge_path);
+  ASSERT_EQ(handles.size(), 6u);
+  const CutResult c = cut_along_loops(TriangleMesh{r.surface.vertices, r.surface.faces}, handles);
+  EXPECT_EQ(c.loops_cut, 6);
+  EXPECT_TRUE(c.notes.empty());
+  EXPECT_EQ(c.after.genus, 0);
+  EXPECT_EQ(c.after.components, 1u);
 }
 
 TEST(AnalyzeAnalytic, CageHasALoopPerHandleAndNeckTheSameWithOneAndTwoThreads) {

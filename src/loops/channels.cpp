@@ -364,6 +364,55 @@ class FaceCells {
     std::vector<int> fill(start_.begin(), start_.end() - 1);
     for (std::size_t f = 0; f < surface.faces.size(); ++f) items_[std::size_t(fill[std::size_t(id[f])]++)] = int(f);
   }
+  // Faces in the cells the plane (p, n) crosses within r of p (their first vertex is within r), in a fixed
+  // order: a slab of cells instead of the ball's volume. Needs cells at least as wide as any face.
+  std::vector<int> near_plane(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& nrm,
+                              double r) const {
+    std::vector<int> out;
+    int a = 0;
+    for (int q = 1; q < 3; ++q)
+      if (std::abs(nrm[q]) > std::abs(nrm[a])) a = q;
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    int lo_i[3], hi_i[3];
+    for (int q = 0; q < 3; ++q) {
+      lo_i[q] = std::max(0, int(std::floor((p[q] - r - lo_[q]) / cell_)));
+      hi_i[q] = std::min(n_[q] - 1, int(std::floor((p[q] + r - lo_[q]) / cell_)));
+      if (lo_i[q] > hi_i[q]) return out;
+    }
+    const double r2 = r * r;
+    for (int iu = lo_i[u]; iu <= hi_i[u]; ++iu)
+      for (int iv = lo_i[v]; iv <= hi_i[v]; ++iv) {
+        // The plane's height along axis a over this column's four corners.
+        double amin = 1e300, amax = -1e300;
+        for (int corner = 0; corner < 4; ++corner) {
+          const double xu = lo_[u] + (iu + (corner & 1)) * cell_, xv = lo_[v] + (iv + (corner >> 1)) * cell_;
+          const double xa = p[a] - (nrm[u] * (xu - p[u]) + nrm[v] * (xv - p[v])) / nrm[a];
+          amin = std::min(amin, xa), amax = std::max(amax, xa);
+        }
+        const int ia0 = std::max(lo_i[a], int(std::floor((amin - lo_[a]) / cell_)) - 1);
+        const int ia1 = std::min(hi_i[a], int(std::floor((amax - lo_[a]) / cell_)) + 1);
+        for (int ia = ia0; ia <= ia1; ++ia) {
+          int ijk[3];
+          ijk[a] = ia, ijk[u] = iu, ijk[v] = iv;
+          const std::size_t c = std::size_t(ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]));
+          for (int t = start_[c]; t < start_[c + 1]; ++t) {
+            const int f = items_[std::size_t(t)];
+            const auto& w = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
+            const double d2 = (w[0] - p[0]) * (w[0] - p[0]) + (w[1] - p[1]) * (w[1] - p[1]) + (w[2] - p[2]) * (w[2] - p[2]);
+            if (d2 > r2) continue;
+            // Only faces the plane cuts hold a piece of the section.
+            int above = 0;
+            for (int q = 0; q < 3; ++q) {
+              const auto& x = surface.vertices[std::size_t(surface.faces[std::size_t(f)][q])];
+              above += (x[0] - p[0]) * nrm[0] + (x[1] - p[1]) * nrm[1] + (x[2] - p[2]) * nrm[2] >= 0;  // as section_of counts 0
+            }
+            if (above == 1 || above == 2) out.push_back(f);
+          }
+        }
+      }
+    return out;
+  }
+
   // faces whose first vertex is within r of p, in increasing order
   std::vector<int> near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) const {
     std::vector<int> out;
@@ -406,22 +455,37 @@ Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double
   return section_of(surface, FaceCells(surface, 2.0).near(surface, p, max_radius + 1), p, n, max_radius);
 }
 
-std::vector<Polyline3> cross_section_loops(const SurfaceMesh& surface, const std::vector<SectionPlane>& planes,
-                                           const std::vector<double>& radii) {
-  std::vector<Polyline3> out(planes.size());
-  if (planes.empty() || radii.empty()) return out;
-  double cell = 0;  // about a tenth of the smallest radius, so that `near` reads few faces beyond it
-  for (double r : radii) cell = cell == 0 ? r : std::min(cell, r);
-  double extent = 0;
-  for (const auto& v : surface.vertices)
-    for (int a = 0; a < 3; ++a) extent = std::max(extent, std::abs(v[a] - surface.vertices[0][a]));
-  const FaceCells cells(surface, std::max({cell / 4, extent / 128, 1e-9}));
-  for (std::size_t i = 0; i < planes.size(); ++i)
-    for (double r : radii) {
-      out[i] = section_of(surface, cells.near(surface, planes[i].point, r + 1e-9), planes[i].point, planes[i].normal, r);
-      if (!out[i].empty()) break;
+struct SurfaceSections::Cells {
+  FaceCells cells;
+};
+
+namespace {
+// Cells as wide as the longest face edge (near_plane's one-cell margin covers a face) and at least 1/128
+// of the surface's extent (so that a wide section reads few thousand columns).
+double section_cell_size(const SurfaceMesh& surface) {
+  double longest = 0, extent = 0;
+  for (const auto& f : surface.faces)
+    for (int e = 0; e < 3; ++e) {
+      const auto &a = surface.vertices[std::size_t(f[e])], &b = surface.vertices[std::size_t(f[(e + 1) % 3])];
+      longest = std::max(longest, std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
     }
-  return out;
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& w : surface.vertices)
+    for (int q = 0; q < 3; ++q) lo[q] = std::min(lo[q], w[q]), hi[q] = std::max(hi[q], w[q]);
+  for (int q = 0; q < 3; ++q) extent = std::max(extent, hi[q] - lo[q]);
+  return std::max({longest * 1.001, extent / 128, 1e-12});
+}
+}  // namespace
+
+SurfaceSections::SurfaceSections(const SurfaceMesh& surface)
+    : surface_(surface), cells_(new Cells{FaceCells(surface, section_cell_size(surface))}) {}
+SurfaceSections::~SurfaceSections() = default;
+
+Polyline3 SurfaceSections::around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius) const {
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0) || surface_.faces.empty()) return {};
+  const std::array<double, 3> unit{n[0] / len, n[1] / len, n[2] / len};
+  return section_of(surface_, cells_->cells.near_plane(surface_, p, unit, max_radius), p, unit, max_radius);
 }
 
 namespace {

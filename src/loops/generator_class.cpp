@@ -58,9 +58,13 @@ int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cy
 }
 
 bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                            SurfaceTopology& topology, const Choke& c, const std::vector<const SideCycle*>& other_side,
-                            const SideCycle* own, Polyline3& out, std::vector<int>& out_path, bool debug) {
-  std::vector<SectionPlane> planes;
+                            SurfaceTopology& topology, const SurfaceSections& sections_of, const Choke& c,
+                            const std::vector<const SideCycle*>& other_side, const SideCycle* own, Polyline3& out,
+                            std::vector<int>& out_path, bool debug) {
+  struct Plane {
+    std::array<double, 3> point, normal;
+  };
+  std::vector<Plane> planes;
   constexpr int kDirections = 48;  // a Fibonacci spiral over the half sphere
   for (int k = 0; k < kDirections; ++k) {
     const double z = 1 - (k + 0.5) / kDirections, rho = std::sqrt(1 - z * z), phi = k * M_PI * (3 - std::sqrt(5.0));
@@ -70,7 +74,7 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
   for (int a = 0; a < 3; ++a) hi[a] = grid.origin[a] + grid.h(a) * (grid.dims[a] - 1);
   if (own) {
     const Polyline3& P = own->points;
-    const std::size_t n = P.size(), step = std::max<std::size_t>(1, n / 48);
+    const std::size_t n = P.size(), step = std::max<std::size_t>(1, n / 40);
     for (std::size_t i = 0; i < n; i += step) {
       bool in_grid = true;
       for (int a = 0; a < 3; ++a) in_grid &= P[i][a] >= lo[a] && P[i][a] <= hi[a];
@@ -80,14 +84,7 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
       Eigen::Vector3d t(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
       if (t.norm() == 0) continue;
       t.normalize();
-      Eigen::Vector3d e1 = std::abs(t[0]) < 0.9 ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 1, 0);
-      e1 = (e1 - e1.dot(t) * t).normalized();
-      const Eigen::Vector3d e2 = t.cross(e1);
       planes.push_back({P[i], {t[0], t[1], t[2]}});
-      for (int q = 0; q < 4; ++q) {  // tilted by 25 degrees: a bend of the cycle need not be square to the neck
-        const Eigen::Vector3d m = std::cos(0.436) * t + std::sin(0.436) * (std::cos(q * M_PI / 2) * e1 + std::sin(q * M_PI / 2) * e2);
-        planes.push_back({P[i], {m[0], m[1], m[2]}});
-      }
     }
   }
   double reach = 0;
@@ -98,27 +95,31 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
   std::vector<char> done(planes.size(), 0);
   double best_length = 1e300;
   for (double radius : {6 * c.depth + 6 * h, 24 * c.depth + 12 * h, std::sqrt(reach)}) {
-    std::vector<SectionPlane> open;
     std::vector<std::size_t> index;
     for (std::size_t i = 0; i < planes.size(); ++i)
-      if (!done[i]) open.push_back(planes[i]), index.push_back(i);
-    std::vector<Polyline3> sections = cross_section_loops(surface, open, {radius});
+      if (!done[i]) index.push_back(i);
+    std::vector<Polyline3> sections(index.size());
+    tbb::parallel_for(std::size_t(0), index.size(), [&](std::size_t i) {
+      sections[i] = sections_of.around(planes[index[i]].point, planes[index[i]].normal, radius);
+    });
     std::vector<std::pair<double, std::size_t>> order;
     for (std::size_t i = 0; i < sections.size(); ++i)
       if (sections[i].size() >= 3) order.push_back({closed_length(sections[i]), i}), done[index[i]] = 1;
     std::stable_sort(order.begin(), order.end());
     for (const auto& [length, i] : order) {
+      // Cheapest test first: the own cycle (one), then the other side's, then the surface's homology.
+      if (own) {
+        const auto lk = linking_number(sections[i], own->points);
+        if (!lk || *lk % 2 == 0) continue;
+      }
+      if (linked_cycle(sections[i], other_side) >= 0) continue;
       std::vector<int> path;
       try {
         path = snap_polyline_to_edge_path(surface, adjacency, sections[i]);
       } catch (const Error&) {
         continue;
       }
-      if (path.size() < 3 || topology.null_homologous(path) || linked_cycle(sections[i], other_side) >= 0) continue;
-      if (own) {
-        const auto lk = linking_number(sections[i], own->points);
-        if (!lk || *lk % 2 == 0) continue;
-      }
+      if (path.size() < 3 || topology.null_homologous(path)) continue;
       if (debug)
         std::fprintf(stderr, "membranes: %s generator depth %g: plane section %g long (plane %zu of %zu, radius %g)\n", to_string(c.side),
                      c.depth, length, index[i], planes.size(), radius);

@@ -13,6 +13,7 @@
 
 namespace chokeloops {
 class SurfaceTopology;
+class SurfaceSections;
 }
 
 namespace chokeloops::detail {
@@ -40,7 +41,8 @@ int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cy
 // degrees), that wind around their point; the shortest that is essential on the surface, links none of
 // `other_side` and links `own` (when given) an odd number of times. False when none does.
 bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                            SurfaceTopology& topology, const Choke& c, const std::vector<const SideCycle*>& other_side,
-                            const SideCycle* own, Polyline3& out, std::vector<int>& out_path, bool debug);
+                            SurfaceTopology& topology, const SurfaceSections& sections, const Choke& c,
+                            const std::vector<const SideCycle*>& other_side, const SideCycle* own, Polyline3& out,
+                            std::vector<int>& out_path, bool debug);
 
 }  // namespace chokeloops::detail

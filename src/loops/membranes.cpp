@@ -34,11 +34,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <mutex>
 #include <unordered_map>
 
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
+#include "chokeloops/loops/channels.h"
 #include "generator_class.h"
 #include "two_lobe_flood.h"
 
@@ -118,7 +121,7 @@ class LoopTracer {
       }
     }
     if (!loop.found && check.other_side &&
-        detail::generator_section_loop(g_, S_, A_, *T_, c, *check.other_side, check.own, raw, raw_path, debug_)) {
+        detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_)) {
       loop.found = true;
       loop.note = "the membrane's interface gave no curve that bounds on its side (a flat core, e.g. a thin wall): the loop is the "
                   "shortest plane section, through the choke or square to its cycle, that is essential, links no cycle of the other "
@@ -406,6 +409,13 @@ class LoopTracer {
   const SurfaceMesh& S_;
   const MeshAdjacency& A_;
   SurfaceTopology* T_;  // null: generators are not checked while their curve is chosen
+  // The surface's faces bucketed for plane sections, made by the first generator that needs them.
+  const SurfaceSections& sections() const {
+    std::call_once(sections_once_, [&] { sections_ = std::make_unique<SurfaceSections>(S_); });
+    return *sections_;
+  }
+  mutable std::once_flag sections_once_;
+  mutable std::unique_ptr<SurfaceSections> sections_;
   const std::array<std::vector<const detail::SideCycle*>, 2>* other_cycles_ = nullptr;  // [handle, tunnel] generator cycles
   bool debug_;
 };

@@ -14,6 +14,7 @@
 // blocked), with cost length / f^2 over vertices where f is at least half the choke's value, to the bulk
 // (f >= bulk_radius or the box border) or, in a cavity, to its widest point; radii are exact f on the path.
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -86,12 +87,18 @@ bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& 
 Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
                              double max_radius);
 
-// The same for many planes over one bucketing of the surface's faces: for each plane the first of `radii`
-// (ascending) within which such a curve closes is used.
-struct SectionPlane {
-  std::array<double, 3> point, normal;
+// The same curve for many planes over one bucketing of the surface's faces: each section reads only the
+// cells its plane crosses. Thread-safe (const).
+class SurfaceSections {
+ public:
+  explicit SurfaceSections(const SurfaceMesh& surface);
+  ~SurfaceSections();
+  Polyline3 around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius) const;
+
+ private:
+  struct Cells;
+  const SurfaceMesh& surface_;
+  std::unique_ptr<Cells> cells_;
 };
-std::vector<Polyline3> cross_section_loops(const SurfaceMesh& surface, const std::vector<SectionPlane>& planes,
-                                           const std::vector<double>& radii);
 
 }  // namespace chokeloops
