@@ -37,8 +37,8 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
 int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles);
 
 // The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
-// point in 48 directions, and by planes square to the choke's own cycle along it (and tilted by 25
-// degrees), that wind around their point; the shortest that is essential on the surface, links none of
+// point in 48 directions, and by planes square to the choke's own cycle at about 40 points along it,
+// that wind around their point; the shortest that is essential on the surface, links none of
 // `other_side` and links `own` (when given) an odd number of times. False when none does.
 bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                             SurfaceTopology& topology, const SurfaceSections& sections, const Choke& c,
