@@ -270,6 +270,26 @@ TEST(AnalyzeAnalytic, PiercedBlockHandleLoopsCutItToOneSphere) {
   EXPECT_EQ(c.after.components, 1u);
 }
 
+TEST(AnalyzeAnalytic, PiercedBlockHandleLoopsAreIndependent) {
+  // 30 holes at 128: some handle generators' loops, each bounding in the solid, fall in the class of others
+  // (cutting along all of them split the block in two). Those are reported missing with a note, so cutting
+  // along the rest keeps one piece and lowers the genus by exactly their number.
+  AnalyzeResult r = analyze_grid(sample_field({128, 128, 128}, analytic::pierced_block(30, 7)), AnalyzeOptions{});
+  ASSERT_EQ(r.surface_stats.genus, 30);
+  std::vector<std::vector<int>> handles;
+  int dependent = 0;
+  for (const Loop& l : r.loops) {
+    if (l.choke.kind != Kind::Generator || l.choke.side != Side::Handle) continue;
+    if (l.found) handles.push_back(l.edge_path);
+    else dependent += l.note.find("class of more persistent") != std::string::npos;
+  }
+  EXPECT_GE(handles.size(), 20u);
+  EXPECT_GE(dependent, 1);
+  const CutResult c = cut_along_loops(TriangleMesh{r.surface.vertices, r.surface.faces}, handles);
+  EXPECT_EQ(c.after.components, 1u);
+  EXPECT_EQ(c.after.genus, 30 - c.loops_cut);
+}
+
 TEST(AnalyzeAnalytic, CageHasALoopPerHandleAndNeckTheSameWithOneAndTwoThreads) {
   // 3x2x2 balls, 20 sticks: genus 20 - 12 + 1 = 9, a neck on every stick; many loops traced at once, so
   // the per-thread scratch of the loop stage is exercised by concurrent loops.

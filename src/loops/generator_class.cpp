@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 
 #include "chokeloops/loops/channels.h"
@@ -133,6 +134,67 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
     if (best_length <= 2 * radius) return true;  // a wider radius holds no shorter one
   }
   return best_length < 1e300;
+}
+
+bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& cycles, std::size_t max_loops) {
+  bool checked = true;
+  for (int side = 0; side < 2; ++side) {
+    const Side s = side == 0 ? Side::Handle : Side::Tunnel;
+    const std::vector<const SideCycle*>& own_side = cycles.by_side[std::size_t(side)];
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < loops.size(); ++i)
+      if (loops[i].found && loops[i].choke.kind == Kind::Generator && loops[i].choke.side == s) order.push_back(i);
+    if (order.empty() || own_side.empty()) continue;
+    if (order.size() > max_loops) {
+      checked = false;
+      continue;
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return loops[a].choke.persistence > loops[b].choke.persistence; });
+    const std::size_t words = (own_side.size() + 63) / 64;
+    std::vector<std::vector<std::uint64_t>> rows(order.size(), std::vector<std::uint64_t>(words, 0));
+    tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t r) {
+      const Polyline3& curve = loops[order[r]].points;
+      std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+      for (const auto& p : curve)
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+      for (std::size_t k = 0; k < own_side.size(); ++k) {
+        const SideCycle& z = *own_side[k];
+        bool apart = false;
+        for (int a = 0; a < 3; ++a) apart |= z.hi[a] < lo[a] || z.lo[a] > hi[a];
+        if (apart) continue;
+        const auto lk = linking_number(curve, z.points);
+        if (lk && (*lk & 1)) rows[r][k / 64] |= std::uint64_t(1) << (k % 64);
+      }
+    });
+    // Gaussian elimination over Z/2, one row at a time: basis[p] has its lowest set bit at p.
+    std::vector<std::vector<std::uint64_t>> basis(own_side.size());
+    for (std::size_t r = 0; r < order.size(); ++r) {
+      std::vector<std::uint64_t>& row = rows[r];
+      bool independent = false;
+      for (;;) {
+        std::size_t w = 0;
+        while (w < words && row[w] == 0) ++w;
+        if (w == words) break;
+        const std::size_t p = w * 64 + std::size_t(__builtin_ctzll(row[w]));
+        if (basis[p].empty()) {
+          basis[p] = row;
+          independent = true;
+          break;
+        }
+        for (std::size_t q = 0; q < words; ++q) row[q] ^= basis[p][q];
+      }
+      if (independent) continue;
+      Loop& l = loops[order[r]];
+      Loop dropped;
+      dropped.choke = l.choke;
+      dropped.trace_ms = l.trace_ms;
+      l = std::move(dropped);
+      l.note = "its loop was in the class of more persistent generator loops of its side (its linking numbers with the "
+               "side's cycles add nothing to theirs): not reported";
+    }
+  }
+  return checked;
 }
 
 }  // namespace chokeloops::detail

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "chokeloops/grid.h"
+#include "chokeloops/loops/membranes.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
 #include "chokeloops/topology/chokes.h"
@@ -35,6 +36,14 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
 
 // Index in `cycles` of the first one `curve` links, or -1 (boxes apart are skipped: they cannot link).
 int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles);
+
+// Independence: loops that each bound on their side still need not be independent (two may be in one
+// class). Side by side, in order of persistence, a generator loop whose row of linking numbers (mod 2) with
+// its own side's cycles adds nothing to the rows before it is dropped with a note (found = false): those
+// numbers pair the loops bounding in the solid perfectly with the solid's homology, so the rows of a set of
+// independent loops are independent. `max_loops` bounds the work (loops times cycles linking numbers): a side
+// with more found generator loops is left unchecked and false is returned for it.
+bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& cycles, std::size_t max_loops = 1000);
 
 // The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
 // point in 48 directions, and by planes square to the choke's own cycle at about 40 points along it,

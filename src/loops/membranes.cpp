@@ -450,7 +450,7 @@ void describe_loop(Loop& loop) {
 }
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                              const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology) {
+                              const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology, int genus) {
   // Every generator's cycle, once: each generator's loop is checked against the other side's.
   detail::GeneratorCycles cycles;
   if (topology) detail::make_generator_cycles(grid, chokes, cycles);
@@ -469,6 +469,13 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     }
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }, tbb::simple_partitioner());
+  if (topology && genus > 0) {
+    int handles = 0, tunnels = 0;
+    for (const Choke& c : chokes)
+      if (c.kind == Kind::Generator) ++(c.side == Side::Handle ? handles : tunnels);
+    if (handles == genus && tunnels == genus && int(cycles.by_side[0].size()) == genus && int(cycles.by_side[1].size()) == genus)
+      detail::drop_dependent_generators(loops, cycles);
+  }
   return loops;
 }
 

@@ -86,7 +86,8 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   t = Clock::now();
   stage("loops", 0);
   LoopContext context = prepare_loops(r);
-  r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get());
+  r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
+                        r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
   r.timings_ms["loops"] = ms_since(t);
   t = Clock::now();
   if (context.topology && options.check_generators) drop_contractible_generators(r.loops, *context.topology);

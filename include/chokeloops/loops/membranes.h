@@ -46,9 +46,13 @@ class SurfaceTopology;
 
 // Loops of all chokes, computed in parallel; the result does not depend on the thread count. With a
 // topology of `surface`, a generator's loop is chosen among its membrane's interface curves as the nearest
-// one that is non-contractible on the surface (the box grows until one appears); without, the nearest.
+// one that is non-contractible on the surface and bounds on its side: it links no cycle of the other side's
+// generators (loops/linking.h); else a plane section that does (the box grows until one appears); without,
+// the nearest. `genus`: the surface's genus, when `chokes` hold every generator of the surface; the
+// generator loops of each side are then also checked to be independent, and one that is not is reported
+// missing with a note (the cycles of a side span its homology only when every generator is there).
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options = {},
-                              SurfaceTopology* topology = nullptr);
+                              SurfaceTopology* topology = nullptr, int genus = -1);
 
 }  // namespace chokeloops
