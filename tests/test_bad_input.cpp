@@ -429,3 +429,52 @@ TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
   // and the whole file still reads
   EXPECT_GT(read_vdb_float_grid(write("whole.vdb", bunny), "")->activeVoxelCount(), 0u);
 }
+
+TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
+  // Found by fuzzing, once the PLY harness parsed without converting: CGAL's PLY reader sizes a list by the count the
+  // file gives before reading it, so a face of 2^31 indices in a file of 708 bytes allocated 8 GB
+  // (regression-f4ad5f56b297: its second line says binary, which CGAL follows, and a later format line said ascii,
+  // which this check followed). The format is taken from the second line only, and the body is walked as CGAL reads
+  // it, every list checked against what the file has left.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/ply/regression-f4ad5f56b297", std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found.empty());
+  expect_bad(write("found.ply", found), "format line other than its second line");
+
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
+  expect_bad(write("ascii.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tri +
+                                    "2000000000 0 1 2\n"),
+             "PLY list of 2000000000 items");
+  // a count CGAL's `>>` finds inside what looks like one token
+  expect_bad(write("hidden.ply", head + "element face 1\nproperty list uchar int a\nproperty list int int b\n"
+                                        "end_header\n" + tri + "3 0 1 2+2000000000 0\n"),
+             "PLY list of 2000000000 items");
+  // binary, both byte orders
+  for (const bool big : {false, true}) {
+    std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list int int vertex_indices\nend_header\n";
+    b.append(36, '\0');
+    b += big ? std::string("\x7f\xff\xff\xff", 4) : std::string("\xff\xff\xff\x7f", 4);
+    b.append(12, '\0');
+    expect_bad(write(big ? "big.ply" : "little.ply", b), "PLY list of 2147483647 items");
+  }
+  // the same files with a true count still read
+  EXPECT_EQ(read_mesh(write("good.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" +
+                                            tri + "3 0 1 2\n")).faces.size(), 1u);
+}
+
+TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
+  // Found by fuzzing (UBSan in CGAL's OFF header): a keyword ending in a byte that is not a letter, a comment, and
+  // BINARY on the next line (regression-510dc4a98ed0). CGAL reads that as a binary header and took text for
+  // counts of 3.4e9; the header is now scanned the way CGAL scans it, and the counts checked against the file.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-510dc4a98ed0", std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found.empty());
+  expect_bad(write("found.off", found), "binary OFF header announces");
+  expect_bad(write("comment.off", "# a comment\nOFF # another\n# and one more\n3000000000 1 0\n0 0 0\n"),
+             "more than a file of");
+  EXPECT_EQ(read_mesh(write("good.off", std::string("# c\n") + kTetOff)).faces.size(), 4u);
+}
