@@ -39,6 +39,7 @@ for name in "${NAMES[@]}"; do
   esac
   max_len="${FUZZ_MAX_LEN:-$max_len}"
   start=$(date +%s)
+  stamp="$findings/.started"; touch "$stamp"  # findings of earlier runs stay, and are not counted again
   ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
     -rss_limit_mb=2048 "${extra[@]}" \
     -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
@@ -46,7 +47,8 @@ for name in "${NAMES[@]}"; do
   [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   took=$(( $(date +%s) - start ))
   timing="${took} s, $(( ${runs:-0} / (took > 0 ? took : 1) )) exec/s"
-  found=$(find "$findings" -type f | wc -l)
+  # libFuzzer also leaves its slowest inputs there (slow-unit-*): not crashes
+  found=$(find "$findings" -type f ! -name .started ! -name 'slow-unit-*' -newer "$stamp" | wc -l)
   if [ "$found" -eq 0 ]; then
     echo "fuzz $name: ${runs:-0} executions, 0 crashes ($timing)"
   else
