@@ -477,4 +477,29 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   expect_bad(write("comment.off", "# a comment\nOFF # another\n# and one more\n3000000000 1 0\n0 0 0\n"),
              "more than a file of");
   EXPECT_EQ(read_mesh(write("good.off", std::string("# c\n") + kTetOff)).faces.size(), 4u);
+
+  // Found next: CGAL reads a face line's numbers as double and converts them to std::size_t (UBSan: a face of -20
+  // vertices, regression-c6578a24fa42). Negative, huge or non-finite vertex counts and indices are refused first.
+  std::ifstream in2(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-c6578a24fa42", std::ios::binary);
+  const std::string found2((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found2.empty());
+  expect_bad(write("face.off", found2), "face 1 has -20 vertices");
+  expect_bad(write("index.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 -3\n3 0 3 2\n3 1 2 3\n"),
+             "face 1 references vertex -3");
+  expect_bad(write("nan.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1 # c\n# c\n3 0 2 1\n3 0 1 3\n1e30 0 3 2\n3 1 2 3\n"),
+             "face 2 has 1e+30 vertices");
+  // and a vertex line without its numbers (UBSan in CGAL's texture coordinates: regression-09a7fc5d721a, STOFF)
+  std::ifstream in3(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-09a7fc5d721a", std::ios::binary);
+  const std::string found3((std::istreambuf_iterator<char>(in3)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found3.empty());
+  expect_bad(write("stoff.off", found3), "truncated OFF file");  // what the diagnosis of the whole file says
+  expect_bad(write("short.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "vertex 1 has 2 numbers");
+  // and an edge count CGAL doubles into an int (regression-24130c2839b8: nOFF, binary)
+  std::ifstream in4(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-24130c2839b8", std::ios::binary);
+  const std::string found4((std::istreambuf_iterator<char>(in4)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found4.empty());
+  expect_bad(write("edges.off", found4), "edges (malformed)");
+  expect_bad(write("edges2.off", "OFF\n4 4 2000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "OFF header announces 2000000000 edges");
 }

@@ -88,6 +88,35 @@ std::string printable(std::string s) {
   return s;
 }
 
+void diagnose_ascii(const std::string& path, const std::string& ext);
+
+// A number as CGAL's Input_rep<double> (IO::iformat) reads one: spaces, a sign, then [0-9.eE+-]*, then sscanf.
+bool cgal_ascii_double(std::istream& in, double* value) {
+  char c = 0;
+  do {
+    if (!in.get(c)) return false;
+  } while (std::isspace(static_cast<unsigned char>(c)));
+  std::string buffer;
+  if (c == '-') buffer += '-';
+  else if (c != '+') in.unget();
+  while (in.get(c)) {
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'E' || c == 'e' || c == '+' || c == '-') {
+      buffer += c;
+    } else {
+      in.unget();
+      break;
+    }
+  }
+  in.clear(in.rdstate() & ~std::ios_base::failbit);
+  double d = 0;
+  if (std::sscanf(buffer.c_str(), "%lf", &d) != 1) {
+    in.setstate(std::ios_base::failbit);
+    return false;
+  }
+  if (value) *value = d;
+  return true;
+}
+
 // CGAL's OFF reader reads the counts of an ASCII header as integers and converts an estimate of the halfedges,
 // 2.1 (V + F + 10), to int (undefined beyond INT_MAX, found by fuzzing); a binary header's three big-endian int32
 // it takes as they are. The header is scanned here the way CGAL's File_header_OFF scans it (comments, the keyword
@@ -107,15 +136,30 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   std::string keyword(1, c);
   while (keyword.size() < 41 && in.get(c) && std::isalnum(static_cast<unsigned char>(c))) keyword += c;
   std::size_t j = 0;
-  if (keyword.compare(0, 2, "ST") == 0) j += 2;
+  const bool textures = keyword.compare(0, 2, "ST") == 0;
+  if (textures) j += 2;
   if (j < keyword.size() && keyword[j] == 'C') ++j;
-  if (j < keyword.size() && keyword[j] == 'N') ++j;
-  if (j < keyword.size() && (keyword[j] == '4' || keyword[j] == 'n')) return;  // other dimensions: CGAL refuses them
+  const bool normals = j < keyword.size() && keyword[j] == 'N';
+  if (normals) ++j;
+  // 4OFF and nOFF (homogeneous, n-dimensional): CGAL reads their headers too (nOFF with one more count first), and
+  // doubles the edge count into an int there (overflow, found by fuzzing); their bodies it refuses later itself
+  const bool homogeneous = j < keyword.size() && keyword[j] == '4';
+  if (homogeneous) ++j;
+  const bool dimensional = j < keyword.size() && keyword[j] == 'n';
+  if (dimensional) ++j;
   if (keyword.compare(j, std::string::npos, "OFF") != 0) return;  // not OFF (SKEL, garbage): CGAL refuses it
+  auto check_edges = [&](long long edges) {
+    if (edges < -1000000000LL || edges > 1000000000LL)
+      throw Error(q(path) + ": OFF header announces " + std::to_string(edges) + " edges (malformed)");
+  };
   while ((in >> c) && c == '#') skip_line();  // CGAL's skip_comment_OFF, then the next character
   if (!in) return;
   if (std::isdigit(static_cast<unsigned char>(c))) {  // ASCII counts, read as int by CGAL
     in.unget();
+    if (dimensional) {  // the dimension first
+      int dimension = 0;
+      if (!(in >> dimension)) return;
+    }
     std::uintmax_t counts[2] = {0, 0};
     for (int i = 0; i < 2; ++i) {
       std::string t;
@@ -131,6 +175,60 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
         << " faces, more than a file of " << size << " bytes holds (truncated or malformed)";
       throw Error(s.str());
     }
+    // The body, line by line as CGAL's File_scanner_OFF reads it: CGAL converts a face line's numbers, read as
+    // double, to std::size_t (its vertex count and indices): undefined for a negative, huge or non-finite number
+    // (found by fuzzing: a face of -20 vertices). Such a face is refused here; where CGAL's own reading would
+    // fail (no number, the end of the file), the check stops and leaves the message to the reader.
+    int edges = 0;
+    if (!(in >> edges)) return;
+    check_edges(edges);
+    if (homogeneous || dimensional) return;  // other vertex layouts: CGAL refuses these bodies itself
+    auto next_line = [&](std::string& line) {
+      while ((in >> c) && c == '#') skip_line();  // skip_comment_OFF
+      if (!in) return false;
+      in.unget();
+      std::getline(in, line);
+      const auto hash = line.find('#');
+      if (hash != std::string::npos) line.erase(hash);
+      return true;
+    };
+    // A vertex line with fewer numbers than its coordinates, normal and texture coordinates: CGAL marks the stream
+    // bad but still reads the texture coordinates from the line's numbers (found by fuzzing: none, on STOFF).
+    const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
+    std::string line;
+    for (std::uintmax_t v = 0; v < counts[0]; ++v) {
+      if (!next_line(line)) return;
+      std::istringstream ls(line);
+      std::size_t numbers = 0;
+      while (numbers < needed && cgal_ascii_double(ls, nullptr)) ++numbers;
+      if (numbers < needed) {
+        diagnose_ascii(path, ".off");  // a NaN or infinity among the numbers: named as such
+        std::ostringstream s;
+        s << q(path) << ": vertex " << v << " has " << numbers << " numbers, fewer than the " << needed << " a "
+          << keyword << " vertex needs";
+        throw Error(s.str());
+      }
+    }
+    for (std::uintmax_t f = 0; f < counts[1]; ++f) {
+      if (!next_line(line)) return;
+      std::istringstream ls(line);
+      std::vector<double> entries;
+      for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
+      if (entries.empty()) return;
+      auto bad = [&](double d) { return !(d >= 0 && d < 9e18); };
+      if (bad(entries[0])) {
+        std::ostringstream s;
+        s << q(path) << ": face " << f << " has " << entries[0] << " vertices";
+        throw Error(s.str());
+      }
+      const std::size_t n = std::size_t(entries[0]);
+      for (std::size_t k = 1; k <= n && k < entries.size(); ++k)
+        if (bad(entries[k])) {
+          std::ostringstream s;
+          s << q(path) << ": face " << f << " references vertex " << entries[k];
+          throw Error(s.str());
+        }
+    }
     return;
   }
   std::string word(1, c);
@@ -139,6 +237,10 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     throw Error(q(path) + ": malformed OFF header: the vertex count '" + printable(word) +
                 "' is not a non-negative integer");
   if (c != '\n') skip_line();
+  if (dimensional) {  // the dimension first
+    char dimension[4];
+    if (!in.read(dimension, 4)) throw Error(q(path) + ": truncated binary OFF header (no vertex and face counts)");
+  }
   unsigned char b[12];
   in.read(reinterpret_cast<char*>(b), 12);
   if (in.gcount() < 12) throw Error(q(path) + ": truncated binary OFF header (no vertex and face counts)");
@@ -147,6 +249,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
                         std::uint32_t(b[4 * i + 2]) << 8 | std::uint32_t(b[4 * i + 3]));
   };
   const std::int64_t nv = be32(0), nf = be32(1);
+  check_edges(be32(2));
   if (nv < 0 || nf < 0 || std::uintmax_t(nv) * 12 > size || std::uintmax_t(nf) * 4 > size) {
     std::ostringstream s;
     s << q(path) << ": binary OFF header announces " << nv << " vertices and " << nf
@@ -243,26 +346,7 @@ bool ply_signed_type(const std::string& t) {
 
 // An ASCII number as CGAL's PLY reader extracts one of type `t`: false where CGAL's extraction fails.
 bool ply_ascii_number(std::istream& in, const std::string& t, long long* value) {
-  if (!ply_integer_type(t)) {  // CGAL's Input_rep<float/double>: sign, then [0-9.eE+-]*, then sscanf
-    char c = 0;
-    do {
-      if (!in.get(c)) return false;
-    } while (std::isspace(static_cast<unsigned char>(c)));
-    std::string buffer;
-    if (c == '-') buffer += '-';
-    else if (c != '+') in.unget();
-    while (in.get(c)) {
-      if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'E' || c == 'e' || c == '+' || c == '-') {
-        buffer += c;
-      } else {
-        in.unget();
-        break;
-      }
-    }
-    in.clear();
-    double d;
-    return std::sscanf(buffer.c_str(), "%lf", &d) == 1;
-  }
+  if (!ply_integer_type(t)) return cgal_ascii_double(in, nullptr);
   const std::size_t size = ply_type_size(t);
   const bool is_signed = ply_signed_type(t);
   long long v = 0;
