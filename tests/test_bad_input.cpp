@@ -502,4 +502,11 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   expect_bad(write("edges.off", found4), "edges (malformed)");
   expect_bad(write("edges2.off", "OFF\n4 4 2000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "OFF header announces 2000000000 edges");
+  // and a face whose count CGAL allocates before finding its indices missing (4.4 GB: regression-20686756b7fb)
+  std::ifstream in5(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-20686756b7fb", std::ios::binary);
+  const std::string found5((std::istreambuf_iterator<char>(in5)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found5.empty());
+  expect_bad(write("count.off", found5), "indices");
+  expect_bad(write("count2.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n555555555 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "face 1 has 555555555 vertices but its line holds 3 indices");
 }

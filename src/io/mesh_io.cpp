@@ -222,6 +222,12 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
         throw Error(s.str());
       }
       const std::size_t n = std::size_t(entries[0]);
+      if (n >= entries.size()) {  // CGAL sizes the face by its count before it finds the indices missing
+        std::ostringstream s;
+        s << q(path) << ": face " << f << " has " << n << " vertices but its line holds " << entries.size() - 1
+          << " indices";
+        throw Error(s.str());
+      }
       for (std::size_t k = 1; k <= n && k < entries.size(); ++k)
         if (bad(entries[k])) {
           std::ostringstream s;
