@@ -509,4 +509,12 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   expect_bad(write("count.off", found5), "indices");
   expect_bad(write("count2.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n555555555 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 has 555555555 vertices but its line holds 3 indices");
+  // and COFF colours of 2 numbers, which CGAL read past (ASan: regression-53d38fc2d606)
+  std::ifstream in6(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-53d38fc2d606", std::ios::binary);
+  const std::string found6((std::istreambuf_iterator<char>(in6)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found6.empty());
+  expect_bad(write("colour.off", found6), "face 0 has no numbers");
+  expect_bad(write("colour2.off", "COFF\n3 1 0\n0 0 0 1 2\n1 0 0\n0 1 0\n3 0 1 2\n"), "colour numbers");
+  EXPECT_EQ(read_mesh(write("coff.off", "COFF\n4 4 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 9 9 9 1\n"
+                                        "3 0 2 1\n3 0 1 3 7\n3 0 3 2\n3 1 2 3\n")).faces.size(), 4u);
 }

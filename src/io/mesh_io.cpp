@@ -138,7 +138,8 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   std::size_t j = 0;
   const bool textures = keyword.compare(0, 2, "ST") == 0;
   if (textures) j += 2;
-  if (j < keyword.size() && keyword[j] == 'C') ++j;
+  const bool colours = j < keyword.size() && keyword[j] == 'C';
+  if (colours) ++j;
   const bool normals = j < keyword.size() && keyword[j] == 'N';
   if (normals) ++j;
   // 4OFF and nOFF (homogeneous, n-dimensional): CGAL reads their headers too (nOFF with one more count first), and
@@ -192,6 +193,20 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
       if (hash != std::string::npos) line.erase(hash);
       return true;
     };
+    // COFF: CGAL takes what follows a vertex's or a face's own numbers as its colour: 1 (an index into its colour
+    // map), 3 or 4 numbers, converted to unsigned char (as given, or times 255 when not integers); with 2 it read
+    // past the line's numbers (ASan, found by fuzzing). The count and the range are checked here first.
+    auto check_colour = [&](const std::vector<double>& numbers, std::size_t first, const char* what, std::uintmax_t k) {
+      const std::size_t extra = numbers.size() - first;
+      bool ok = extra == 0 || extra == 1 || extra == 3 || extra == 4;
+      for (std::size_t i = first; ok && i < numbers.size(); ++i) ok = numbers[i] >= 0 && numbers[i] <= 255;
+      if (!ok) {
+        std::ostringstream s;
+        s << q(path) << ": " << what << " " << k << " has " << extra
+          << " colour numbers, or one outside 0-255 (a COFF colour is 1, 3 or 4 numbers)";
+        throw Error(s.str());
+      }
+    };
     // A vertex line with fewer numbers than its coordinates, normal and texture coordinates: CGAL marks the stream
     // bad but still reads the texture coordinates from the line's numbers (found by fuzzing: none, on STOFF).
     const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
@@ -199,8 +214,10 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     for (std::uintmax_t v = 0; v < counts[0]; ++v) {
       if (!next_line(line)) return;
       std::istringstream ls(line);
-      std::size_t numbers = 0;
-      while (numbers < needed && cgal_ascii_double(ls, nullptr)) ++numbers;
+      std::vector<double> numbers_read;
+      for (double d; cgal_ascii_double(ls, &d);) numbers_read.push_back(d);
+      const std::size_t numbers = numbers_read.size();
+      if (colours && numbers >= needed) check_colour(numbers_read, needed, "vertex", v);
       if (numbers < needed) {
         diagnose_ascii(path, ".off");  // a NaN or infinity among the numbers: named as such
         std::ostringstream s;
@@ -214,6 +231,8 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
       std::istringstream ls(line);
       std::vector<double> entries;
       for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
+      if (entries.empty() && colours)  // CGAL marks the stream bad but still reads the face's colour
+        throw Error(q(path) + ": face " + std::to_string(f) + " has no numbers");
       if (entries.empty()) return;
       auto bad = [&](double d) { return !(d >= 0 && d < 9e18); };
       if (bad(entries[0])) {
@@ -228,6 +247,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
           << " indices";
         throw Error(s.str());
       }
+      if (colours) check_colour(entries, n + 1, "face", f);
       for (std::size_t k = 1; k <= n && k < entries.size(); ++k)
         if (bad(entries[k])) {
           std::ostringstream s;
