@@ -1,7 +1,8 @@
 # CHOKELOOPS_FUZZ=ON (with CXX=clang++): libFuzzer harnesses fuzz/fuzz_*.cpp for every input reader (meshes,
-# .vdb, PDB/mmCIF, NIfTI/NRRD/MetaImage), over the input stage (src/io, src/field) built with
-# -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh. Included from the top
-# CMakeLists.txt, which then stops (no other targets).
+# .vdb, PDB/mmCIF, NIfTI/NRRD/MetaImage), and two for what the levelset stage does with a parsed mesh or grid
+# (fuzz_mesh_levelset, fuzz_vdb_levelset: inputs decoded straight into tiny meshes and grids), over the input
+# stage (src/io, src/field) built with -fsanitize=fuzzer-no-link,address,undefined. Run them with scripts/fuzz.sh.
+# Included from the top CMakeLists.txt, which then stops (no other targets).
 # The build type sets the optimisation (scripts/fuzz.sh: FUZZ_BUILD_TYPE, default RelWithDebInfo = -O2 -g;
 # Debug gets -O1 here). Assertions stay on in every build type
 # (NDEBUG is taken out): a failed assertion in our code or in CGAL/Eigen is a finding too.
@@ -42,7 +43,9 @@ endfunction()
 foreach(ext obj ply off stl)
   chokeloops_add_fuzzer(fuzz_${ext} ${PROJECT_SOURCE_DIR}/fuzz/fuzz_mesh_reader.cpp CHOKELOOPS_FUZZ_EXT=".${ext}")
 endforeach()
+chokeloops_add_fuzzer(fuzz_mesh_levelset ${PROJECT_SOURCE_DIR}/fuzz/fuzz_mesh_levelset.cpp)
 chokeloops_add_fuzzer(fuzz_vdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_vdb_reader.cpp)
+chokeloops_add_fuzzer(fuzz_vdb_levelset ${PROJECT_SOURCE_DIR}/fuzz/fuzz_vdb_levelset.cpp)
 chokeloops_add_fuzzer(fuzz_pdb ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.cpp CHOKELOOPS_FUZZ_EXT=".pdb")
 chokeloops_add_fuzzer(fuzz_cif ${PROJECT_SOURCE_DIR}/fuzz/fuzz_molecule_reader.cpp CHOKELOOPS_FUZZ_EXT=".cif")
 chokeloops_add_fuzzer(fuzz_nii ${PROJECT_SOURCE_DIR}/fuzz/fuzz_volume_reader.cpp CHOKELOOPS_FUZZ_EXT=".nii")

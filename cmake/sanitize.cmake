@@ -14,8 +14,10 @@ target_compile_options(chokeloops_input PUBLIC ${CHOKELOOPS_SANITIZE_FLAGS})
 target_link_options(chokeloops_input PUBLIC -fsanitize=address,undefined)
 target_link_libraries(chokeloops_input PUBLIC ${CHOKELOOPS_INPUT_LINK_LIBRARIES})
 
+# main.cpp restarts the program with huge pages when asked (src/pipeline/huge_pages.cpp, no other dependency)
 add_executable(chokeloops ${PROJECT_SOURCE_DIR}/tools/main.cpp ${PROJECT_SOURCE_DIR}/tools/cmd_levelset.cpp
-  ${PROJECT_SOURCE_DIR}/tools/args.cpp ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
+  ${PROJECT_SOURCE_DIR}/tools/args.cpp ${PROJECT_SOURCE_DIR}/src/pipeline/huge_pages.cpp
+  ${PROJECT_SOURCE_DIR}/cmake/sanitize_options.cpp)
 target_link_libraries(chokeloops PRIVATE chokeloops_input)
 
 enable_testing()

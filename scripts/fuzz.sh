@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Fuzzes every input reader with libFuzzer (clang, ASan + UBSan): configures build-fuzz with
-# CHOKELOOPS_FUZZ=ON (cmake/fuzz.cmake), builds the harnesses fuzz/fuzz_*.cpp and runs each for SECONDS,
+# CHOKELOOPS_FUZZ=ON (cmake/fuzz.cmake), builds the harnesses fuzz/fuzz_*.cpp (one per reader: obj ply off stl
+# vdb pdb cif nii nrrd mha; and mesh_levelset, vdb_levelset for the levelset stage) and runs each for SECONDS,
 # starting from the corpus kept in fuzz/corpus/NAME. Prints one line per harness:
 #   fuzz NAME: N executions, 0 crashes (T s, R exec/s)   (or the number of findings and where they are)
 # Usage: scripts/fuzz.sh [SECONDS] [NAME...]   (default 60 s, every harness)
 # Environment:
 #   FUZZ_RUNS=N          stop each harness after N executions instead (SECONDS is then only an upper bound,
 #                        0 = none; e.g. FUZZ_RUNS=1000000 scripts/fuzz.sh 0 obj)
-#   FUZZ_MAX_LEN=BYTES   largest input libFuzzer makes (default 8192; 65536 for vdb, with -len_control=0)
+#   FUZZ_MAX_LEN=BYTES   largest input libFuzzer makes (default 8192; 65536 for vdb, with -len_control=0; what the
+#                        decoding reads for mesh_levelset and vdb_levelset)
 #   FUZZ_BUILD_TYPE=T    CMAKE_BUILD_TYPE of the fuzz build (default RelWithDebInfo: -O2 -g, assertions on)
 #   FUZZ_UPDATE_CORPUS=1 merges what a run found into fuzz/corpus/NAME (minimised: only inputs that add coverage).
 #   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
@@ -29,12 +31,15 @@ for name in "${NAMES[@]}"; do
   work="$BUILD/corpus/$name" findings="$BUILD/findings/$name"
   mkdir -p "$work" "$findings"
   log="$BUILD/fuzz_$name.log"
-  max_len="${FUZZ_MAX_LEN:-8192}" extra=()
-  if [ "$name" = vdb ]; then  # binary seeds of 10-33 KB: mutate them at full length from the start
-    [ -n "${FUZZ_MAX_LEN:-}" ] || max_len=65536
-    extra=(-len_control=0)
-  fi
+  max_len=8192 extra=()
+  case "$name" in
+    vdb) max_len=65536; extra=(-len_control=0) ;;  # binary seeds of 10-33 KB: mutate them at full length from the start
+    mesh_levelset) max_len=512 ;;                   # 24 vertices and 48 faces take 290 bytes
+    vdb_levelset) max_len=2565 ;;                   # 512 values of 5 bytes after a 5-byte header
+  esac
+  max_len="${FUZZ_MAX_LEN:-$max_len}"
   start=$(date +%s)
+  stamp="$findings/.started"; touch "$stamp"  # findings of earlier runs stay, and are not counted again
   ASAN_OPTIONS=detect_leaks=0 "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
     -rss_limit_mb=2048 "${extra[@]}" \
     -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
@@ -42,7 +47,8 @@ for name in "${NAMES[@]}"; do
   [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   took=$(( $(date +%s) - start ))
   timing="${took} s, $(( ${runs:-0} / (took > 0 ? took : 1) )) exec/s"
-  found=$(find "$findings" -type f | wc -l)
+  # libFuzzer also leaves its slowest inputs there (slow-unit-*): not crashes
+  found=$(find "$findings" -type f ! -name .started ! -name 'slow-unit-*' -newer "$stamp" | wc -l)
   if [ "$found" -eq 0 ]; then
     echo "fuzz $name: ${runs:-0} executions, 0 crashes ($timing)"
   else

@@ -21,6 +21,7 @@
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
 #include "chokeloops/io/vdb_io.h"
+#include "io/vdb_guard.h"
 
 namespace fs = std::filesystem;
 using namespace chokeloops;
@@ -388,4 +389,132 @@ TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_FALSE(bytes.empty());
   expect_bad(write("tile.vdb", bytes), "corrupt metadata");  // its buffer count, checked before the tiles
+}
+
+TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
+  // Found by fuzzing: the .vdb harness reached libFuzzer's 2 GB RSS limit after about 6,400 refused files. OpenVDB 10's
+  // RootNode::readTopology makes each child of the root (270 KB) before reading it and keeps it only once its read
+  // returns, so a file ending inside a child lost the child and everything made under it (ASan's leak check: 305 KB
+  // for regression-97adff69922f, bunny_8.vdb cut at 11000 bytes, inside the leaves of the root's child; 270 KB for
+  // regression-ec5896e9dbe9, cut at 4000, inside that child's values). The guard's topology reader frees it.
+  auto corpus = [](const std::string& name) {
+    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  auto refused = [&](const std::string& path) {
+    try {
+      read_vdb_float_grid(path, "");
+      ADD_FAILURE() << path << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code, 2) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(fs::path(path).filename().string()), std::string::npos) << e.what();
+    }
+  };
+  for (const char* name : {"regression-97adff69922f", "regression-ec5896e9dbe9"}) {
+    const std::string bytes = corpus(name);
+    ASSERT_FALSE(bytes.empty()) << name;
+    const unsigned long before = vdb_guard_nodes_freed();
+    refused(write(std::string(name) + ".vdb", bytes));
+    EXPECT_EQ(vdb_guard_nodes_freed(), before + 1) << name;
+    EXPECT_EQ(run_cli("'" + (dir / (std::string(name) + ".vdb")).string() + "' -o '" + out + "' --resolution 16").code, 2);
+  }
+  // Every cut of the file is refused with one line, and the cuts inside the root's child free it.
+  const std::string bunny = corpus("bunny_8.vdb");
+  ASSERT_FALSE(bunny.empty());
+  const unsigned long before = vdb_guard_nodes_freed();
+  int cuts = 0;
+  for (std::size_t cut = 101; cut < bunny.size(); cut += 499, ++cuts) refused(write("cut.vdb", bunny.substr(0, cut)));
+  EXPECT_GE(vdb_guard_nodes_freed() - before, 10u) << "of " << cuts << " cuts";
+  // and the whole file still reads
+  EXPECT_GT(read_vdb_float_grid(write("whole.vdb", bunny), "")->activeVoxelCount(), 0u);
+}
+
+TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
+  // Found by fuzzing, once the PLY harness parsed without converting: CGAL's PLY reader sizes a list by the count the
+  // file gives before reading it, so a face of 2^31 indices in a file of 708 bytes allocated 8 GB
+  // (regression-f4ad5f56b297: its second line says binary, which CGAL follows, and a later format line said ascii,
+  // which this check followed). The format is taken from the second line only, and the body is walked as CGAL reads
+  // it, every list checked against what the file has left.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/ply/regression-f4ad5f56b297", std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found.empty());
+  expect_bad(write("found.ply", found), "format line other than its second line");
+
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string tri = "0 0 0\n1 0 0\n0 1 0\n";
+  expect_bad(write("ascii.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tri +
+                                    "2000000000 0 1 2\n"),
+             "PLY list of 2000000000 items");
+  // a count CGAL's `>>` finds inside what looks like one token
+  expect_bad(write("hidden.ply", head + "element face 1\nproperty list uchar int a\nproperty list int int b\n"
+                                        "end_header\n" + tri + "3 0 1 2+2000000000 0\n"),
+             "PLY list of 2000000000 items");
+  // binary, both byte orders
+  for (const bool big : {false, true}) {
+    std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 1\nproperty list int int vertex_indices\nend_header\n";
+    b.append(36, '\0');
+    b += big ? std::string("\x7f\xff\xff\xff", 4) : std::string("\xff\xff\xff\x7f", 4);
+    b.append(12, '\0');
+    expect_bad(write(big ? "big.ply" : "little.ply", b), "PLY list of 2147483647 items");
+  }
+  // the same files with a true count still read
+  EXPECT_EQ(read_mesh(write("good.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" +
+                                            tri + "3 0 1 2\n")).faces.size(), 1u);
+}
+
+TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
+  // Found by fuzzing (UBSan in CGAL's OFF header): a keyword ending in a byte that is not a letter, a comment, and
+  // BINARY on the next line (regression-510dc4a98ed0). CGAL reads that as a binary header and took text for
+  // counts of 3.4e9; the header is now scanned the way CGAL scans it, and the counts checked against the file.
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-510dc4a98ed0", std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found.empty());
+  expect_bad(write("found.off", found), "binary OFF header announces");
+  expect_bad(write("comment.off", "# a comment\nOFF # another\n# and one more\n3000000000 1 0\n0 0 0\n"),
+             "more than a file of");
+  EXPECT_EQ(read_mesh(write("good.off", std::string("# c\n") + kTetOff)).faces.size(), 4u);
+
+  // Found next: CGAL reads a face line's numbers as double and converts them to std::size_t (UBSan: a face of -20
+  // vertices, regression-c6578a24fa42). Negative, huge or non-finite vertex counts and indices are refused first.
+  std::ifstream in2(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-c6578a24fa42", std::ios::binary);
+  const std::string found2((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found2.empty());
+  expect_bad(write("face.off", found2), "face 1 has -20 vertices");
+  expect_bad(write("index.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 -3\n3 0 3 2\n3 1 2 3\n"),
+             "face 1 references vertex -3");
+  expect_bad(write("nan.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1 # c\n# c\n3 0 2 1\n3 0 1 3\n1e30 0 3 2\n3 1 2 3\n"),
+             "face 2 has 1e+30 vertices");
+  // and a vertex line without its numbers (UBSan in CGAL's texture coordinates: regression-09a7fc5d721a, STOFF)
+  std::ifstream in3(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-09a7fc5d721a", std::ios::binary);
+  const std::string found3((std::istreambuf_iterator<char>(in3)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found3.empty());
+  expect_bad(write("stoff.off", found3), "truncated OFF file");  // what the diagnosis of the whole file says
+  expect_bad(write("short.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "vertex 1 has 2 numbers");
+  // and an edge count CGAL doubles into an int (regression-24130c2839b8: nOFF, binary)
+  std::ifstream in4(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-24130c2839b8", std::ios::binary);
+  const std::string found4((std::istreambuf_iterator<char>(in4)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found4.empty());
+  expect_bad(write("edges.off", found4), "edges (malformed)");
+  expect_bad(write("edges2.off", "OFF\n4 4 2000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "OFF header announces 2000000000 edges");
+  // and a face whose count CGAL allocates before finding its indices missing (4.4 GB: regression-20686756b7fb)
+  std::ifstream in5(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-20686756b7fb", std::ios::binary);
+  const std::string found5((std::istreambuf_iterator<char>(in5)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found5.empty());
+  expect_bad(write("count.off", found5), "indices");
+  expect_bad(write("count2.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n555555555 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "face 1 has 555555555 vertices but its line holds 3 indices");
+  // and COFF colours of 2 numbers, which CGAL read past (ASan: regression-53d38fc2d606)
+  std::ifstream in6(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-53d38fc2d606", std::ios::binary);
+  const std::string found6((std::istreambuf_iterator<char>(in6)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(found6.empty());
+  expect_bad(write("colour.off", found6), "face 0 has no numbers");
+  expect_bad(write("colour2.off", "COFF\n3 1 0\n0 0 0 1 2\n1 0 0\n0 1 0\n3 0 1 2\n"), "colour numbers");
+  EXPECT_EQ(read_mesh(write("coff.off", "COFF\n4 4 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 9 9 9 1\n"
+                                        "3 0 2 1\n3 0 1 3 7\n3 0 3 2\n3 1 2 3\n")).faces.size(), 4u);
 }
