@@ -1,0 +1,484 @@
+// The checks of OFF and PLY files before CGAL reads them, and the diagnostics of refused ASCII files
+// (mesh_format_checks.h).
+#include "mesh_format_checks.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "chokeloops/grid.h"
+
+namespace chokeloops::detail {
+namespace {
+
+std::string q(const std::string& path) { return quoted(path); }
+
+}  // namespace
+
+std::size_t ply_type_size(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+// A header line as it may be shown in a one-line message: control bytes as '?', at most 60 characters.
+std::string printable(std::string s) {
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return s;
+}
+
+
+// A number as CGAL's Input_rep<double> (IO::iformat) reads one: spaces, a sign, then [0-9.eE+-]*, then sscanf.
+bool cgal_ascii_double(std::istream& in, double* value) {
+  char c = 0;
+  do {
+    if (!in.get(c)) return false;
+  } while (std::isspace(static_cast<unsigned char>(c)));
+  std::string buffer;
+  if (c == '-') buffer += '-';
+  else if (c != '+') in.unget();
+  while (in.get(c)) {
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'E' || c == 'e' || c == '+' || c == '-') {
+      buffer += c;
+    } else {
+      in.unget();
+      break;
+    }
+  }
+  in.clear(in.rdstate() & ~std::ios_base::failbit);
+  double d = 0;
+  if (std::sscanf(buffer.c_str(), "%lf", &d) != 1) {
+    in.setstate(std::ios_base::failbit);
+    return false;
+  }
+  if (value) *value = d;
+  return true;
+}
+
+// CGAL's OFF reader reads the counts of an ASCII header as integers and converts an estimate of the halfedges,
+// 2.1 (V + F + 10), to int (undefined beyond INT_MAX, found by fuzzing); a binary header's three big-endian int32
+// it takes as they are. The header is scanned here the way CGAL's File_header_OFF scans it (comments, the keyword
+// as its letters and digits, then either a count or the word BINARY after more comments: found by fuzzing, a
+// keyword ending in a non-alphanumeric byte and BINARY two lines below), and the counts CGAL will take must be
+// non-negative and fit the file (ASCII: 2 bytes an item; binary: 12 bytes a vertex, at least 4 a face).
+void check_off_header(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  auto skip_line = [&] {
+    char c;
+    while (in.get(c) && c != '\n') {
+    }
+  };
+  char c = 0;
+  while ((in >> c) && c == '#') skip_line();
+  if (!in) return;  // no header: CGAL refuses it
+  std::string keyword(1, c);
+  while (keyword.size() < 41 && in.get(c) && std::isalnum(static_cast<unsigned char>(c))) keyword += c;
+  std::size_t j = 0;
+  const bool textures = keyword.compare(0, 2, "ST") == 0;
+  if (textures) j += 2;
+  const bool colours = j < keyword.size() && keyword[j] == 'C';
+  if (colours) ++j;
+  const bool normals = j < keyword.size() && keyword[j] == 'N';
+  if (normals) ++j;
+  // 4OFF and nOFF (homogeneous, n-dimensional): CGAL reads their headers too (nOFF with one more count first), and
+  // doubles the edge count into an int there (overflow, found by fuzzing); their bodies it refuses later itself
+  const bool homogeneous = j < keyword.size() && keyword[j] == '4';
+  if (homogeneous) ++j;
+  const bool dimensional = j < keyword.size() && keyword[j] == 'n';
+  if (dimensional) ++j;
+  if (keyword.compare(j, std::string::npos, "OFF") != 0) return;  // not OFF (SKEL, garbage): CGAL refuses it
+  auto check_edges = [&](long long edges) {
+    if (edges < -1000000000LL || edges > 1000000000LL)
+      throw Error(q(path) + ": OFF header announces " + std::to_string(edges) + " edges (malformed)");
+  };
+  while ((in >> c) && c == '#') skip_line();  // CGAL's skip_comment_OFF, then the next character
+  if (!in) return;
+  if (std::isdigit(static_cast<unsigned char>(c))) {  // ASCII counts, read as int by CGAL
+    in.unget();
+    if (dimensional) {  // the dimension first
+      int dimension = 0;
+      if (!(in >> dimension)) return;
+    }
+    std::uintmax_t counts[2] = {0, 0};
+    for (int i = 0; i < 2; ++i) {
+      std::string t;
+      in >> t;
+      if (t.empty() || t.size() > 10 || t.find_first_not_of("0123456789") != std::string::npos)
+        throw Error(q(path) + ": malformed OFF header: the " + (i == 0 ? "vertex" : "face") + " count '" +
+                    printable(t) + "' is not a non-negative integer");
+      counts[i] = std::stoull(t);
+    }
+    if (counts[0] > size / 2 || counts[1] > size / 2) {
+      std::ostringstream s;
+      s << q(path) << ": OFF header announces " << counts[0] << " vertices and " << counts[1]
+        << " faces, more than a file of " << size << " bytes holds (truncated or malformed)";
+      throw Error(s.str());
+    }
+    // The body, line by line as CGAL's File_scanner_OFF reads it: CGAL converts a face line's numbers, read as
+    // double, to std::size_t (its vertex count and indices): undefined for a negative, huge or non-finite number
+    // (found by fuzzing: a face of -20 vertices). Such a face is refused here; where CGAL's own reading would
+    // fail (no number, the end of the file), the check stops and leaves the message to the reader.
+    int edges = 0;
+    if (!(in >> edges)) return;
+    check_edges(edges);
+    if (homogeneous || dimensional) return;  // other vertex layouts: CGAL refuses these bodies itself
+    auto next_line = [&](std::string& line) {
+      while ((in >> c) && c == '#') skip_line();  // skip_comment_OFF
+      if (!in) return false;
+      in.unget();
+      std::getline(in, line);
+      const auto hash = line.find('#');
+      if (hash != std::string::npos) line.erase(hash);
+      return true;
+    };
+    // COFF: CGAL takes what follows a vertex's or a face's own numbers as its colour: 1 (an index into its colour
+    // map), 3 or 4 numbers, converted to unsigned char (as given, or times 255 when not integers); with 2 it read
+    // past the line's numbers (ASan, found by fuzzing). The count and the range are checked here first.
+    auto check_colour = [&](const std::vector<double>& numbers, std::size_t first, const char* what, std::uintmax_t k) {
+      const std::size_t extra = numbers.size() - first;
+      bool ok = extra == 0 || extra == 1 || extra == 3 || extra == 4;
+      for (std::size_t i = first; ok && i < numbers.size(); ++i) ok = numbers[i] >= 0 && numbers[i] <= 255;
+      if (!ok) {
+        std::ostringstream s;
+        s << q(path) << ": " << what << " " << k << " has " << extra
+          << " colour numbers, or one outside 0-255 (a COFF colour is 1, 3 or 4 numbers)";
+        throw Error(s.str());
+      }
+    };
+    // A vertex line with fewer numbers than its coordinates, normal and texture coordinates: CGAL marks the stream
+    // bad but still reads the texture coordinates from the line's numbers (found by fuzzing: none, on STOFF).
+    const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
+    std::string line;
+    for (std::uintmax_t v = 0; v < counts[0]; ++v) {
+      if (!next_line(line)) return;
+      std::istringstream ls(line);
+      std::vector<double> numbers_read;
+      for (double d; cgal_ascii_double(ls, &d);) numbers_read.push_back(d);
+      const std::size_t numbers = numbers_read.size();
+      if (colours && numbers >= needed) check_colour(numbers_read, needed, "vertex", v);
+      if (numbers < needed) {
+        diagnose_ascii(path, ".off");  // a NaN or infinity among the numbers: named as such
+        std::ostringstream s;
+        s << q(path) << ": vertex " << v << " has " << numbers << " numbers, fewer than the " << needed << " a "
+          << keyword << " vertex needs";
+        throw Error(s.str());
+      }
+    }
+    for (std::uintmax_t f = 0; f < counts[1]; ++f) {
+      if (!next_line(line)) return;
+      std::istringstream ls(line);
+      std::vector<double> entries;
+      for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
+      if (entries.empty() && colours)  // CGAL marks the stream bad but still reads the face's colour
+        throw Error(q(path) + ": face " + std::to_string(f) + " has no numbers");
+      if (entries.empty()) return;
+      auto bad = [&](double d) { return !(d >= 0 && d < 9e18); };
+      if (bad(entries[0])) {
+        std::ostringstream s;
+        s << q(path) << ": face " << f << " has " << entries[0] << " vertices";
+        throw Error(s.str());
+      }
+      const std::size_t n = std::size_t(entries[0]);
+      if (n >= entries.size()) {  // CGAL sizes the face by its count before it finds the indices missing
+        std::ostringstream s;
+        s << q(path) << ": face " << f << " has " << n << " vertices but its line holds " << entries.size() - 1
+          << " indices";
+        throw Error(s.str());
+      }
+      if (colours) check_colour(entries, n + 1, "face", f);
+      for (std::size_t k = 1; k <= n && k < entries.size(); ++k)
+        if (bad(entries[k])) {
+          std::ostringstream s;
+          s << q(path) << ": face " << f << " references vertex " << entries[k];
+          throw Error(s.str());
+        }
+    }
+    return;
+  }
+  std::string word(1, c);
+  while (word.size() < 41 && in.get(c) && std::isalnum(static_cast<unsigned char>(c))) word += c;
+  if (word != "BINARY")  // CGAL refuses it too
+    throw Error(q(path) + ": malformed OFF header: the vertex count '" + printable(word) +
+                "' is not a non-negative integer");
+  if (c != '\n') skip_line();
+  if (dimensional) {  // the dimension first
+    char dimension[4];
+    if (!in.read(dimension, 4)) throw Error(q(path) + ": truncated binary OFF header (no vertex and face counts)");
+  }
+  unsigned char b[12];
+  in.read(reinterpret_cast<char*>(b), 12);
+  if (in.gcount() < 12) throw Error(q(path) + ": truncated binary OFF header (no vertex and face counts)");
+  auto be32 = [&](int i) {
+    return std::int32_t(std::uint32_t(b[4 * i]) << 24 | std::uint32_t(b[4 * i + 1]) << 16 |
+                        std::uint32_t(b[4 * i + 2]) << 8 | std::uint32_t(b[4 * i + 3]));
+  };
+  const std::int64_t nv = be32(0), nf = be32(1);
+  check_edges(be32(2));
+  if (nv < 0 || nf < 0 || std::uintmax_t(nv) * 12 > size || std::uintmax_t(nf) * 4 > size) {
+    std::ostringstream s;
+    s << q(path) << ": binary OFF header announces " << nv << " vertices and " << nf
+      << " faces, which a file of " << size << " bytes cannot hold (truncated or malformed)";
+    throw Error(s.str());
+  }
+}
+
+PlyHeader read_ply_header(const std::string& path) {
+  PlyHeader h;
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line)) return h;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != "ply") throw Error(q(path) + ": not a PLY file (first line is not 'ply')");
+  std::size_t count = 0;
+  std::size_t lineno = 1;  // header lines read, counting comments (CGAL's numbering)
+  std::string current;
+  std::size_t fixed = 0, lists_min = 0;  // per element of `current`
+  auto close_element = [&] {
+    if (current.empty()) return;
+    h.min_body_bytes += count * (fixed + lists_min);
+    if (current == "vertex") { h.vertex_count = count; h.has_vertex = true; }
+    if (current == "face") { h.face_count = count; h.has_face = true; }
+  };
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string kw;
+    ls >> kw;
+    // CGAL's PLY reader trusts the header's grammar (a property before any element crashes it): check it here.
+    if (kw.empty()) throw Error(q(path) + ": PLY header has an empty line");
+    if (kw == "comment" || kw == "obj_info") {
+      ++lineno;
+      continue;
+    }
+    if (kw != "format" && kw != "element" && kw != "property" && kw != "end_header")
+      throw Error(q(path) + ": malformed PLY header line '" + printable(line) + "'");
+    if (kw == "property" && current.empty())
+      throw Error(q(path) + ": PLY header has a property before any element");
+    ++lineno;
+    // CGAL takes the format from the second line and ignores format lines elsewhere: so must this check
+    if (kw == "format" && lineno != 2)
+      throw Error(q(path) + ": PLY header has a format line other than its second line");
+    if (lineno == 2 && kw != "format") throw Error(q(path) + ": PLY header's second line is not its format");
+    if (kw == "format") ls >> h.format;
+    else if (kw == "element") {
+      close_element();
+      current.clear();
+      long long c = -1;
+      ls >> current >> c;
+      if (c < 0) throw Error(q(path) + ": malformed PLY header line '" + line + "'");
+      count = std::size_t(c);
+      fixed = lists_min = 0;
+      h.elements.push_back({count, {}});
+    } else if (kw == "property") {
+      std::string t;
+      ls >> t;
+      if (t == "list") {
+        std::string ct, it;
+        ls >> ct >> it;
+        if (!ply_type_size(ct) || !ply_type_size(it))
+          throw Error(q(path) + ": PLY header line '" + printable(line) + "' names an unknown type");
+        if (ct == "float" || ct == "float32" || ct == "double" || ct == "float64")
+          throw Error(q(path) + ": PLY header line '" + printable(line) + "' gives a list a floating-point count");
+        // the list count itself, plus at least 3 indices for a face
+        lists_min += ply_type_size(ct) + (current == "face" ? 3 * ply_type_size(it) : 0);
+        h.elements.back().properties.push_back({it, ct});
+      } else {
+        if (!ply_type_size(t)) throw Error(q(path) + ": PLY header line '" + printable(line) + "' names an unknown type");
+        fixed += ply_type_size(t);
+        h.elements.back().properties.push_back({t, ""});
+      }
+    } else if (kw == "end_header") {
+      close_element();
+      h.ok = true;
+      h.header_bytes = std::size_t(in.tellg());
+      return h;
+    }
+  }
+  throw Error(q(path) + ": truncated PLY header (no end_header)");
+}
+
+// CGAL's PLY reader sizes each list by the count the file gives (vector::resize) before reading its items: a count
+// of 2^31 in a file of 700 bytes allocated 8 GB (found by fuzzing). The body is walked here first, element by
+// element as CGAL reads it (binary: the declared sizes and byte order; ASCII: the same extractions, `>>` for
+// integers and CGAL's scan for floating point), and a list longer than what the file has left is refused. Where
+// CGAL's own reading would fail (a bad number, the end of the file, a negative count, which vector refuses), the walk
+// stops and leaves the message to the reader.
+bool ply_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
+bool ply_signed_type(const std::string& t) {
+  return t == "char" || t == "int8" || t == "short" || t == "int16" || t == "int" || t == "int32";
+}
+
+// An ASCII number as CGAL's PLY reader extracts one of type `t`: false where CGAL's extraction fails.
+bool ply_ascii_number(std::istream& in, const std::string& t, long long* value) {
+  if (!ply_integer_type(t)) return cgal_ascii_double(in, nullptr);
+  const std::size_t size = ply_type_size(t);
+  const bool is_signed = ply_signed_type(t);
+  long long v = 0;
+  if (size == 1 && is_signed) { short x; if (!(in >> x)) return false; v = static_cast<signed char>(x); }
+  else if (size == 1) { unsigned short x; if (!(in >> x)) return false; v = static_cast<unsigned char>(x); }
+  else if (size == 2 && is_signed) { short x; if (!(in >> x)) return false; v = x; }
+  else if (size == 2) { unsigned short x; if (!(in >> x)) return false; v = x; }
+  else if (is_signed) { std::int32_t x; if (!(in >> x)) return false; v = x; }
+  else { std::uint32_t x; if (!(in >> x)) return false; v = x; }
+  if (value) *value = v;
+  return true;
+}
+
+void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(std::streamoff(h.header_bytes));
+  const bool ascii = h.format == "ascii", big = h.format == "binary_big_endian";
+  if (!ascii && !big && h.format != "binary_little_endian") return;  // CGAL refuses other formats itself
+  auto left = [&]() -> std::uintmax_t {
+    const std::streamoff here = in.tellg();
+    return here < 0 || std::uintmax_t(here) >= size ? 0 : size - std::uintmax_t(here);
+  };
+  auto refuse = [&](long long count, std::size_t element) {
+    std::ostringstream s;
+    s << q(path) << ": PLY list of " << count << " items in element " << element
+      << " is longer than the rest of the file (truncated or malformed)";
+    throw Error(s.str());
+  };
+  for (std::size_t e = 0; e < h.elements.size(); ++e) {
+    const PlyHeader::Element& el = h.elements[e];
+    if (el.properties.empty()) continue;
+    std::size_t fixed = 0;
+    bool lists = false;
+    for (const auto& p : el.properties) {
+      lists = lists || !p.count_type.empty();
+      fixed += ply_type_size(p.type);
+    }
+    if (!ascii && !lists) {  // binary, fixed size: skip the whole element
+      if (std::uintmax_t(fixed) * el.count > left()) return;
+      in.seekg(std::streamoff(fixed * el.count), std::ios_base::cur);
+      continue;
+    }
+    for (std::size_t i = 0; i < el.count; ++i)  // each instance takes at least one byte: ends with the file
+      for (const auto& p : el.properties) {
+        const std::size_t item = ply_type_size(p.type);
+        if (ascii) {
+          long long n = 1;
+          if (!ply_ascii_number(in, p.count_type.empty() ? p.type : p.count_type, &n)) return;
+          if (p.count_type.empty()) continue;
+          if (n < 0) return;
+          if (std::uintmax_t(n) > left() / 2 + 1) refuse(n, e);  // an item and a separator each
+          for (long long k = 0; k < n; ++k)
+            if (!ply_ascii_number(in, p.type, nullptr)) return;
+          continue;
+        }
+        if (p.count_type.empty()) {
+          if (item > left()) return;
+          in.seekg(std::streamoff(item), std::ios_base::cur);
+          continue;
+        }
+        const std::size_t cs = ply_type_size(p.count_type);
+        unsigned char b[4] = {0, 0, 0, 0};
+        if (cs > left() || !in.read(reinterpret_cast<char*>(b), std::streamsize(cs))) return;
+        std::uint32_t u = 0;
+        for (std::size_t k = 0; k < cs; ++k) u |= std::uint32_t(b[big ? cs - 1 - k : k]) << (8 * k);
+        long long n = u;
+        if (ply_signed_type(p.count_type) && (u >> (8 * cs - 1)) & 1u) return;  // negative
+        if (std::uintmax_t(n) * item > left()) refuse(n, e);
+        in.seekg(std::streamoff(std::uintmax_t(n) * item), std::ios_base::cur);
+      }
+  }
+}
+
+
+// ---- diagnostics for ASCII files CGAL refused: find the first non-finite number ----
+void diagnose_ascii(const std::string& path, const std::string& ext) {
+  std::ifstream in(path);
+  std::string line;
+  std::size_t lineno = 0;
+  while (std::getline(in, line) && lineno < 50000000) {
+    ++lineno;
+    std::istringstream ls(line);
+    std::string tok;
+    while (ls >> tok) {
+      std::string t = tok;
+      for (auto& c : t) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (!t.empty() && (t[0] == '-' || t[0] == '+')) t = t.substr(1);
+      if (t == "nan" || t == "inf" || t == "infinity" || t.rfind("nan(", 0) == 0)
+        throw Error(q(path) + ": non-finite coordinate '" + tok + "' on line " + std::to_string(lineno));
+    }
+  }
+  diagnose_faces(path, ext);
+}
+
+// OBJ / OFF: faces referencing missing vertices, or no faces at all.
+void diagnose_faces(const std::string& path, const std::string& ext) {
+  std::ifstream in(path);
+  std::string line;
+  auto bad_index = [&](long long idx, long long nv, std::size_t face) {
+    std::ostringstream s;
+    s << q(path) << ": face " << face << " references vertex " << idx << " but the file has only " << nv
+      << " vertices";
+    throw Error(s.str());
+  };
+  if (ext == ".obj") {
+    long long nv = 0;
+    std::size_t nf = 0;
+    std::vector<std::string> faces;
+    while (std::getline(in, line)) {
+      std::istringstream ls(line);
+      std::string kw;
+      ls >> kw;
+      if (kw == "v") ++nv;
+      else if (kw == "f") {
+        std::string tok;
+        while (ls >> tok) {
+          long long idx = std::atoll(tok.c_str());  // "i/t/n" → i
+          long long abs_idx = idx < 0 ? nv + idx + 1 : idx;
+          if (idx == 0 || abs_idx < 1 || abs_idx > nv) bad_index(idx, nv, nf);
+        }
+        ++nf;
+      }
+    }
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+  } else if (ext == ".off") {
+    std::vector<std::string> toks;
+    std::string tok;
+    // tokens without comments
+    while (std::getline(in, line)) {
+      auto hash = line.find('#');
+      if (hash != std::string::npos) line.resize(hash);
+      std::istringstream ls(line);
+      while (ls >> tok) toks.push_back(tok);
+      if (toks.size() > 50000000) return;
+    }
+    std::size_t t = 0;
+    if (t < toks.size() && toks[t].find("OFF") != std::string::npos) ++t;
+    if (t + 3 > toks.size()) return;
+    auto is_int = [](const std::string& x) {
+      return !x.empty() && std::all_of(x.begin(), x.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+    };
+    if (!is_int(toks[t]) || !is_int(toks[t + 1]) || !is_int(toks[t + 2])) return;
+    long long nv = std::atoll(toks[t].c_str()), nf = std::atoll(toks[t + 1].c_str());
+    t += 3;
+    if (nf == 0) throw Error(q(path) + ": no faces (" + std::to_string(nv) + " vertices, 0 faces)");
+    t += std::size_t(std::max(0LL, nv)) * 3;
+    for (long long f = 0; f < nf && t < toks.size(); ++f) {
+      long long k = std::atoll(toks[t++].c_str());
+      for (long long j = 0; j < k && t < toks.size(); ++j) {
+        long long idx = std::atoll(toks[t++].c_str());
+        if (idx < 0 || idx >= nv) bad_index(idx, nv, std::size_t(f));
+      }
+      // skip optional colour values up to the next face: not handled (rare); stop at mismatch
+    }
+    if (t < toks.size() && std::size_t(nv) * 3 + 3 < toks.size()) return;
+    if (toks.size() < t) throw Error(q(path) + ": truncated OFF file");
+  }
+}
+
+}  // namespace chokeloops::detail
