@@ -73,6 +73,12 @@ class BadInput : public ::testing::Test {
   std::string out;
 };
 
+// The bytes of an input kept in fuzz/corpus (e.g. "off/regression-510dc4a98ed0"); empty if it is missing.
+std::string fuzz_input(const std::string& name) {
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/" + name, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 const char* kTetOff = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 
 std::string binary_ply_tet() {
@@ -243,8 +249,7 @@ TEST_F(BadInput, FuzzTinyObjectInLargeUnits) {
   std::string tiny = "OFF\n4 4 0\n0 0 0\n1e-5 0 0\n0 1e-5 0\n0 0 1e-5\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
   expect_bad(write("tiny.off", tiny), "smallest OpenVDB");
   for (const char* name : {"ply/regression-b45680d4d87f", "stl/regression-bf93d9d201a6"}) {
-    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/" + name, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = fuzz_input(name);
     ASSERT_FALSE(bytes.empty()) << name;
     const std::string ext = std::string(name).substr(0, 3);
     CliRun r = run_cli("'" + write("fuzz." + ext, bytes) + "' -o '" + out + "' --resolution 16");
@@ -257,8 +262,7 @@ TEST_F(BadInput, FuzzNoFaceLeftAfterRemovingDegenerateOnes) {
   // Found by fuzzing (UBSan, optimised build): faces with distinct indices whose points are collinear are all
   // removed as degenerate; CGAL's outward orientation then read the orientation of a component that does not
   // exist. Refused instead: nothing is left to convert.
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/obj/regression-478ce6d8f6fa", std::ios::binary);
-  const std::string obj((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string obj = fuzz_input("obj/regression-478ce6d8f6fa");
   ASSERT_FALSE(obj.empty());
   expect_bad(write("degenerate.obj", obj), "every face is degenerate");
   expect_bad(write("collinear.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 3 4\n"),
@@ -285,8 +289,7 @@ TEST_F(BadInput, FuzzVdbBlockLongerThanItsBuffer) {
   // set to 0xff, which makes it a raw block of 7e16 bytes for a 2048-byte buffer; 0e298147d4e5: the fuzzer's
   // crossover doing the same; 5adf9289733f: a length that made OpenVDB allocate 4 GiB.
   for (const char* name : {"regression-7fd0598244cf", "regression-0e298147d4e5", "regression-5adf9289733f"}) {
-    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = fuzz_input(std::string("vdb/") + name);
     ASSERT_FALSE(bytes.empty()) << name;
     expect_bad(write(std::string(name) + ".vdb", bytes), "corrupt value block");
   }
@@ -330,10 +333,7 @@ TEST_F(BadInput, FuzzVdbBlockLongerThanItsBuffer) {
 TEST_F(BadInput, FuzzVdbMetadataLongerThanTheFile) {
   // Found by fuzzing, once blocks were guarded: a metadata name whose length claims 1.7 GB made OpenVDB 10 allocate
   // it (regression-c9048a042607). Names, values and the delayed-load table are now checked against the file first.
-  auto corpus = [](const std::string& name) {
-    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  };
+  auto corpus = [](const std::string& name) { return fuzz_input("vdb/" + name); };
   // regression-9059e41ce871: a blosc table length in the delayed-load table of 1.7 GB, allocated by the guard itself
   // before it was checked against the table's own length.
   for (const char* found_name : {"regression-c9048a042607", "regression-9059e41ce871"}) {
@@ -366,8 +366,7 @@ TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
   // Found by fuzzing, once metadata was guarded: OpenVDB 10 reads a tree's topology without looking at the stream,
   // so a count of 2^32 children went on allocating nodes past the end of a 33 KB file (1.4 GB). The guard makes the
   // stream throw at its end; this input is now refused before that, by the root check (its buffer count is not 1).
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f797ba18d54e", std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = fuzz_input("vdb/regression-f797ba18d54e");
   ASSERT_FALSE(bytes.empty());
   const std::string path = write("children.vdb", bytes);
   try {
@@ -385,8 +384,7 @@ TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
 TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
   // Found by fuzzing (UBSan): OpenVDB's header code reads a root tile's active flag straight into a bool, and a
   // byte other than 0 or 1 there is undefined behaviour. The guard checks the float grid's root tiles first.
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/regression-f1b5600801d0", std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bytes = fuzz_input("vdb/regression-f1b5600801d0");
   ASSERT_FALSE(bytes.empty());
   expect_bad(write("tile.vdb", bytes), "corrupt metadata");  // its buffer count, checked before the tiles
 }
@@ -397,10 +395,7 @@ TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
   // returns, so a file ending inside a child lost the child and everything made under it (ASan's leak check: 305 KB
   // for regression-97adff69922f, bunny_8.vdb cut at 11000 bytes, inside the leaves of the root's child; 270 KB for
   // regression-ec5896e9dbe9, cut at 4000, inside that child's values). The guard's topology reader frees it.
-  auto corpus = [](const std::string& name) {
-    std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/vdb/" + name, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  };
+  auto corpus = [](const std::string& name) { return fuzz_input("vdb/" + name); };
   auto refused = [&](const std::string& path) {
     try {
       read_vdb_float_grid(path, "");
@@ -436,8 +431,7 @@ TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
   // (regression-f4ad5f56b297: its second line says binary, which CGAL follows, and a later format line said ascii,
   // which this check followed). The format is taken from the second line only, and the body is walked as CGAL reads
   // it, every list checked against what the file has left.
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/ply/regression-f4ad5f56b297", std::ios::binary);
-  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string found = fuzz_input("ply/regression-f4ad5f56b297");
   ASSERT_FALSE(found.empty());
   expect_bad(write("found.ply", found), "format line other than its second line");
 
@@ -470,8 +464,7 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   // Found by fuzzing (UBSan in CGAL's OFF header): a keyword ending in a byte that is not a letter, a comment, and
   // BINARY on the next line (regression-510dc4a98ed0). CGAL reads that as a binary header and took text for
   // counts of 3.4e9; the header is now scanned the way CGAL scans it, and the counts checked against the file.
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-510dc4a98ed0", std::ios::binary);
-  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string found = fuzz_input("off/regression-510dc4a98ed0");
   ASSERT_FALSE(found.empty());
   expect_bad(write("found.off", found), "binary OFF header announces");
   expect_bad(write("comment.off", "# a comment\nOFF # another\n# and one more\n3000000000 1 0\n0 0 0\n"),
@@ -480,8 +473,7 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
 
   // Found next: CGAL reads a face line's numbers as double and converts them to std::size_t (UBSan: a face of -20
   // vertices, regression-c6578a24fa42). Negative, huge or non-finite vertex counts and indices are refused first.
-  std::ifstream in2(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-c6578a24fa42", std::ios::binary);
-  const std::string found2((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  const std::string found2 = fuzz_input("off/regression-c6578a24fa42");
   ASSERT_FALSE(found2.empty());
   expect_bad(write("face.off", found2), "face 1 has -20 vertices");
   expect_bad(write("index.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 -3\n3 0 3 2\n3 1 2 3\n"),
@@ -489,29 +481,25 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   expect_bad(write("nan.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1 # c\n# c\n3 0 2 1\n3 0 1 3\n1e30 0 3 2\n3 1 2 3\n"),
              "face 2 has 1e+30 vertices");
   // and a vertex line without its numbers (UBSan in CGAL's texture coordinates: regression-09a7fc5d721a, STOFF)
-  std::ifstream in3(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-09a7fc5d721a", std::ios::binary);
-  const std::string found3((std::istreambuf_iterator<char>(in3)), std::istreambuf_iterator<char>());
+  const std::string found3 = fuzz_input("off/regression-09a7fc5d721a");
   ASSERT_FALSE(found3.empty());
   expect_bad(write("stoff.off", found3), "truncated OFF file");  // what the diagnosis of the whole file says
   expect_bad(write("short.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "vertex 1 has 2 numbers");
   // and an edge count CGAL doubles into an int (regression-24130c2839b8: nOFF, binary)
-  std::ifstream in4(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-24130c2839b8", std::ios::binary);
-  const std::string found4((std::istreambuf_iterator<char>(in4)), std::istreambuf_iterator<char>());
+  const std::string found4 = fuzz_input("off/regression-24130c2839b8");
   ASSERT_FALSE(found4.empty());
   expect_bad(write("edges.off", found4), "edges (malformed)");
   expect_bad(write("edges2.off", "OFF\n4 4 2000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "OFF header announces 2000000000 edges");
   // and a face whose count CGAL allocates before finding its indices missing (4.4 GB: regression-20686756b7fb)
-  std::ifstream in5(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-20686756b7fb", std::ios::binary);
-  const std::string found5((std::istreambuf_iterator<char>(in5)), std::istreambuf_iterator<char>());
+  const std::string found5 = fuzz_input("off/regression-20686756b7fb");
   ASSERT_FALSE(found5.empty());
   expect_bad(write("count.off", found5), "indices");
   expect_bad(write("count2.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n555555555 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 has 555555555 vertices but its line holds 3 indices");
   // and COFF colours of 2 numbers, which CGAL read past (ASan: regression-53d38fc2d606)
-  std::ifstream in6(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/off/regression-53d38fc2d606", std::ios::binary);
-  const std::string found6((std::istreambuf_iterator<char>(in6)), std::istreambuf_iterator<char>());
+  const std::string found6 = fuzz_input("off/regression-53d38fc2d606");
   ASSERT_FALSE(found6.empty());
   expect_bad(write("colour.off", found6), "face 0 has no numbers");
   expect_bad(write("colour2.off", "COFF\n3 1 0\n0 0 0 1 2\n1 0 0\n0 1 0\n3 0 1 2\n"), "colour numbers");
