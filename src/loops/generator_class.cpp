@@ -17,6 +17,24 @@
 
 namespace chokeloops::detail {
 
+namespace {
+struct Box {
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+};
+Box box_of(const Polyline3& curve) {
+  Box b;
+  for (const auto& p : curve)
+    for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], p[a]), b.hi[a] = std::max(b.hi[a], p[a]);
+  return b;
+}
+// A plane between the boxes of a curve and a cycle: the two cannot link.
+bool apart(const Box& b, const SideCycle& z) {
+  for (int a = 0; a < 3; ++a)
+    if (z.hi[a] < b.lo[a] || z.lo[a] > b.hi[a]) return true;
+  return false;
+}
+}  // namespace
+
 void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& chokes, GeneratorCycles& out) {
   std::vector<std::size_t> generators;
   for (std::size_t i = 0; i < chokes.size(); ++i)
@@ -27,10 +45,8 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
   tbb::parallel_for(std::size_t(0), generators.size(), [&](std::size_t k) {
     SideCycle& z = out.storage[k];
     z.points = generator_cycle(grid, chokes[generators[k]]);
-    z.lo = {1e300, 1e300, 1e300};
-    z.hi = {-1e300, -1e300, -1e300};
-    for (const auto& p : z.points)
-      for (int a = 0; a < 3; ++a) z.lo[a] = std::min(z.lo[a], p[a]), z.hi[a] = std::max(z.hi[a], p[a]);
+    const Box b = box_of(z.points);
+    z.lo = b.lo, z.hi = b.hi;
   });
   const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
   for (std::size_t k = 0; k < generators.size(); ++k) {
@@ -44,14 +60,10 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
 }
 
 int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles) {
-  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (const auto& p : curve)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  const Box box = box_of(curve);
   for (std::size_t k = 0; k < cycles.size(); ++k) {
     const SideCycle& z = *cycles[k];
-    bool apart = false;  // a plane between the two boxes: they cannot link
-    for (int a = 0; a < 3; ++a) apart |= z.hi[a] < lo[a] || z.lo[a] > hi[a];
-    if (apart) continue;
+    if (apart(box, z)) continue;
     const auto lk = linking_number(curve, z.points);
     if (lk && *lk != 0) return int(k);
   }
@@ -155,14 +167,10 @@ bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& 
     std::vector<std::vector<std::uint64_t>> rows(order.size(), std::vector<std::uint64_t>(words, 0));
     tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t r) {
       const Polyline3& curve = loops[order[r]].points;
-      std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-      for (const auto& p : curve)
-        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+      const Box box = box_of(curve);
       for (std::size_t k = 0; k < own_side.size(); ++k) {
         const SideCycle& z = *own_side[k];
-        bool apart = false;
-        for (int a = 0; a < 3; ++a) apart |= z.hi[a] < lo[a] || z.lo[a] > hi[a];
-        if (apart) continue;
+        if (apart(box, z)) continue;
         const auto lk = linking_number(curve, z.points);
         if (lk && (*lk & 1)) rows[r][k / 64] |= std::uint64_t(1) << (k % 64);
       }
