@@ -216,7 +216,20 @@ LevelSetResult levelset_from_vdb(openvdb::FloatGrid::ConstPtr input, const Level
         << " is not crossed (use --iso)";
       throw Error(s.str());
     }
-    sdf = openvdb::tools::fogToSdf(*input, float(o.iso));
+    // Unset voxels hold the background: one denser than the iso value would put all space outside the active
+    // region inside the surface, and OpenVDB's fogToSdf throws from its sweeping on it.
+    if (!(input->background() < o.iso)) {
+      std::ostringstream s;
+      s << who << ": fog volume's background value " << input->background() << " (the value of every voxel not stored)"
+        << " is not below the iso value " << o.iso << ", so the inside would fill all space (use --iso above it)";
+      throw Error(s.str());
+    }
+    try {
+      sdf = openvdb::tools::fogToSdf(*input, float(o.iso));
+    } catch (const openvdb::Exception& e) {
+      throw Error(who + ": OpenVDB could not turn the fog volume into a signed distance at the iso value (" +
+                  e.what() + ")");
+    }
     res.source = "vdb fog";
   } else {
     if (!(vmin < 0 && vmax > 0)) throw Error(who + ": level set has no zero crossing (all values of one sign)");
