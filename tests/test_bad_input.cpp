@@ -22,6 +22,7 @@
 #include "chokeloops/io/mesh_io.h"
 #include "chokeloops/io/vdb_io.h"
 #include "io/vdb_guard.h"
+#include "../fuzz/vdb_levelset_decode.h"
 
 namespace fs = std::filesystem;
 using namespace chokeloops;
@@ -243,6 +244,49 @@ TEST_F(BadInput, FuzzOffCountsBeyondInt) {
   expect_bad(write("binshort.off", "OFF BINARY\n\0\0"), "truncated binary OFF header");
 }
 
+TEST_F(BadInput, FuzzBinaryOffFaceLongerThanTheFile) {
+  // CGAL reads a binary face's vertex count as an int32 into a std::size_t and sizes the face by it before reading
+  // its indices: a negative or huge count allocated gigabytes. Each count is checked against the bytes left.
+  auto be32 = [](std::uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+  };
+  auto tet = [&](std::uint32_t first_count) {
+    std::string s = "OFF BINARY\n" + be32(4) + be32(4) + be32(0);
+    const float points[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (const auto& p : points)
+      for (float x : p) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &x, 4);
+        s += be32(bits);
+      }
+    const std::uint32_t faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    for (int f = 0; f < 4; ++f) {
+      s += be32(f == 0 ? first_count : 3);
+      for (std::uint32_t v : faces[f]) s += be32(v);
+    }
+    return s;
+  };
+  EXPECT_EQ(run_cli("'" + write("tet.off", tet(3)) + "' -o '" + out + "' --resolution 16").code, 0);
+  expect_bad(write("huge.off", tet(0x7fffffffu)), "binary OFF face 0 has 2147483647 vertices");
+  expect_bad(write("negative.off", tet(0xfffffff0u)), "binary OFF face 0 has -16 vertices");
+  expect_bad(write("long.off", tet(16)), "binary OFF face 0 has 16 vertices, more than the 60 bytes");
+}
+
+TEST_F(BadInput, FuzzCoffLineWithoutColourAfterOnesWithIt) {
+  // Found by fuzzing (ASan, heap-buffer-overflow in CGAL's File_scanner_OFF::scan_color): CGAL's "has colours" flag
+  // is set by the first vertex (or face) with a colour and never cleared, so a later line without one had its
+  // colour read past its numbers. The input: a COFF vertex "0 1 1 1" (a colour index), then "0 1 00)".
+  const std::string bytes = fuzz_input("off/regression-0e7494690950");
+  ASSERT_FALSE(bytes.empty());
+  expect_bad(write("vertex.off", bytes), "vertex 1 has no colour after vertices with one");
+  expect_bad(write("face.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 255 0 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
+             "face 1 has no colour after faces with one");
+  // Colours on every line, or on none, or from some line on, read as before.
+  for (const char* ok : {"COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3 1\n3 0 3 2 2\n3 1 2 3 3\n",
+                         "COFF\n4 4 0\n0 0 0 9\n1 0 0 9\n0 1 0 9\n0 0 1 9\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"})
+    EXPECT_EQ(run_cli("'" + write("ok.off", ok) + "' -o '" + out + "' --resolution 16").code, 0) << ok;
+}
+
 TEST_F(BadInput, FuzzTinyObjectInLargeUnits) {
   // Found by fuzzing (PLY and STL): an object so small that its voxel size cubed is below OpenVDB's 3e-15 made
   // OpenVDB's transform throw its own exception. Refused with exit code 2 and what to do.
@@ -425,6 +469,37 @@ TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
   EXPECT_GT(read_vdb_float_grid(write("whole.vdb", bunny), "")->activeVoxelCount(), 0u);
 }
 
+TEST_F(BadInput, FuzzFogWhoseBackgroundIsDenserThanTheIsoValueIsRefused) {
+  // Found by fuzzing (fuzz_vdb_levelset): a grid of unknown class with only non-negative values is read as a fog
+  // volume, and its background, 12, lies above the iso value 0.5: every voxel not stored would be inside, so the
+  // inside fills all space. OpenVDB's fogToSdf threw a ValueError from its sweeping ("the inside value must be
+  // negative"), which is not an Error: the harness ended in std::terminate.
+  const std::string bytes = fuzz_input("vdb_levelset/regression-c9222b5eacc3");
+  ASSERT_FALSE(bytes.empty());
+  ensure_openvdb_initialized();
+  const openvdb::FloatGrid::Ptr grid =
+      fuzz::decode_vdb_levelset_grid(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+  ASSERT_TRUE(grid);
+  ASSERT_GT(grid->background(), 0.5f);
+  LevelSetOptions o;
+  o.quiet = true;
+  try {
+    levelset_from_vdb(grid, o, "fog");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find("background value 12"), std::string::npos) << e.what();
+  }
+  // The same grid in a file, through the CLI: exit code 2 and one line; with an iso value above the background it
+  // is a fog volume like any other.
+  grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+  const std::string path = (dir / "dense_background.vdb").string();
+  openvdb::io::File(path).write({grid});
+  expect_bad(path, "is not below the iso value 0.5");
+  o.iso = 100;
+  EXPECT_NO_THROW(levelset_from_vdb(grid, o, "fog"));
+}
+
 TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
   // Found by fuzzing, once the PLY harness parsed without converting: CGAL's PLY reader sizes a list by the count the
   // file gives before reading it, so a face of 2^31 indices in a file of 708 bytes allocated 8 GB
@@ -504,5 +579,5 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   expect_bad(write("colour.off", found6), "face 0 has no numbers");
   expect_bad(write("colour2.off", "COFF\n3 1 0\n0 0 0 1 2\n1 0 0\n0 1 0\n3 0 1 2\n"), "colour numbers");
   EXPECT_EQ(read_mesh(write("coff.off", "COFF\n4 4 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 9 9 9 1\n"
-                                        "3 0 2 1\n3 0 1 3 7\n3 0 3 2\n3 1 2 3\n")).faces.size(), 4u);
+                                        "3 0 2 1\n3 0 1 3 7\n3 0 3 2 8\n3 1 2 3 9\n")).faces.size(), 4u);
 }

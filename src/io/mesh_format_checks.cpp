@@ -144,9 +144,20 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     };
     // COFF: CGAL takes what follows a vertex's or a face's own numbers as its colour: 1 (an index into its colour
     // map), 3 or 4 numbers, converted to unsigned char (as given, or times 255 when not integers); with 2 it read
-    // past the line's numbers (ASan, found by fuzzing). The count and the range are checked here first.
-    auto check_colour = [&](const std::vector<double>& numbers, std::size_t first, const char* what, std::uintmax_t k) {
+    // past the line's numbers (ASan, found by fuzzing). The count and the range are checked here first. CGAL's
+    // "has colours" flag, for vertices and for faces, is set by the first line with a colour and never cleared, so
+    // it reads a colour for every later line: one without (`seen` true) read past the numbers too (ASan, found by
+    // fuzzing: a COFF vertex with a colour, then one without).
+    auto check_colour = [&](const std::vector<double>& numbers, std::size_t first, const char* what, std::uintmax_t k,
+                            bool& seen) {
       const std::size_t extra = numbers.size() - first;
+      if (extra == 0 && seen) {
+        std::ostringstream s;
+        s << q(path) << ": " << what << " " << k << " has no colour after " << (what[0] == 'v' ? "vertices" : "faces")
+          << " with one (in a COFF file, every " << what << " after the first with a colour needs one)";
+        throw Error(s.str());
+      }
+      seen = seen || extra > 0;
       bool ok = extra == 0 || extra == 1 || extra == 3 || extra == 4;
       for (std::size_t i = first; ok && i < numbers.size(); ++i) ok = numbers[i] >= 0 && numbers[i] <= 255;
       if (!ok) {
@@ -160,13 +171,14 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     // bad but still reads the texture coordinates from the line's numbers (found by fuzzing: none, on STOFF).
     const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
     std::string line;
+    bool vertex_colours = false, face_colours = false;
     for (std::uintmax_t v = 0; v < counts[0]; ++v) {
       if (!next_line(line)) return;
       std::istringstream ls(line);
       std::vector<double> numbers_read;
       for (double d; cgal_ascii_double(ls, &d);) numbers_read.push_back(d);
       const std::size_t numbers = numbers_read.size();
-      if (colours && numbers >= needed) check_colour(numbers_read, needed, "vertex", v);
+      if (colours && numbers >= needed) check_colour(numbers_read, needed, "vertex", v, vertex_colours);
       if (numbers < needed) {
         diagnose_ascii(path, ".off");  // a NaN or infinity among the numbers: named as such
         std::ostringstream s;
@@ -196,7 +208,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
           << " indices";
         throw Error(s.str());
       }
-      if (colours) check_colour(entries, n + 1, "face", f);
+      if (colours) check_colour(entries, n + 1, "face", f, face_colours);
       for (std::size_t k = 1; k <= n && k < entries.size(); ++k)
         if (bad(entries[k])) {
           std::ostringstream s;
@@ -230,6 +242,31 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     s << q(path) << ": binary OFF header announces " << nv << " vertices and " << nf
       << " faces, which a file of " << size << " bytes cannot hold (truncated or malformed)";
     throw Error(s.str());
+  }
+  // The faces: CGAL reads each one's vertex count as an int32 into a std::size_t and sizes the face by it before
+  // reading its indices, so a negative or huge count (other than -1) allocated up to 16 GB. Each count is checked
+  // against what the file has left. Vertices are big-endian floats: 3 coordinates (4 for 4OFF), 3 normal
+  // components (4) for N, 2 texture coordinates (3) for ST; COFF colours are not read from binary files.
+  if (dimensional) return;  // CGAL refuses these bodies itself
+  const std::uintmax_t per_vertex = 4 * ((homogeneous ? 4 : 3) + (normals ? (homogeneous ? 4 : 3) : 0) +
+                                         (textures ? (homogeneous ? 3 : 2) : 0));
+  const std::streamoff body = in.tellg();
+  if (body < 0 || std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex > size) return;  // CGAL stops at the end
+  std::uintmax_t at = std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex;
+  in.seekg(std::streamoff(at));
+  for (std::int64_t f = 0; f < nf; ++f) {
+    if (!in.read(reinterpret_cast<char*>(b), 4)) return;  // CGAL's read fails there and it refuses the file
+    at += 4;
+    const std::int64_t n = be32(0);
+    if (n == -1) return;  // CGAL's own "no face" check
+    if (n < 0 || std::uintmax_t(n) * 4 > size - at) {
+      std::ostringstream s;
+      s << q(path) << ": binary OFF face " << f << " has " << n << " vertices, more than the " << (size - at)
+        << " bytes left in the file hold (truncated or malformed)";
+      throw Error(s.str());
+    }
+    at += std::uintmax_t(n) * 4;
+    in.seekg(std::streamoff(at));
   }
 }
 
