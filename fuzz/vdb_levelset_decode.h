@@ -20,7 +20,7 @@ inline float vdb_levelset_value(std::uint8_t lo, std::uint8_t hi, double h) {
   return float(double(v) / 64.0 * h);
 }
 
-/// The grid the bytes describe, or null when there are fewer than 5. OpenVDB must be initialised.
+/// The grid the bytes describe, or null when there are fewer than 5 or the voxel is below OpenVDB's smallest. OpenVDB must be initialised.
 inline openvdb::FloatGrid::Ptr decode_vdb_levelset_grid(const std::uint8_t* data, std::size_t size) {
   if (size < 5) return nullptr;
   const int exponent = std::clamp(int(static_cast<std::int8_t>(data[1])), -24, 24);
@@ -28,7 +28,12 @@ inline openvdb::FloatGrid::Ptr decode_vdb_levelset_grid(const std::uint8_t* data
   auto grid = openvdb::FloatGrid::create(std::abs(vdb_levelset_value(data[3], data[4], h)));
   const openvdb::GridClass classes[] = {openvdb::GRID_LEVEL_SET, openvdb::GRID_FOG_VOLUME, openvdb::GRID_UNKNOWN};
   grid->setGridClass(classes[data[0] % 3]);
-  auto xf = openvdb::math::Transform::createLinearTransform(h);
+  openvdb::math::Transform::Ptr xf;
+  try {
+    xf = openvdb::math::Transform::createLinearTransform(h);  // throws below OpenVDB's smallest voxel
+  } catch (const openvdb::ArithmeticError&) {
+    return nullptr;  // not a grid a file can hold: its transform's reading refuses it (the .vdb harness)
+  }
   if (data[0] & 4) xf->preScale(openvdb::Vec3d(1, 2, 1));
   if (data[0] & 8) xf->postTranslate(openvdb::Vec3d(0.5 * h));
   grid->setTransform(xf);

@@ -39,29 +39,13 @@ std::string printable(std::string s) {
 }
 
 
-// A number as CGAL's Input_rep<double> (IO::iformat) reads one: spaces, a sign, then [0-9.eE+-]*, then sscanf.
+// A number as CGAL's IO::iformat reads one: with g++ and clang its Input_rep<double> is the stream's own `>>`
+// (CGAL scans by hand only for old MSVC, CGAL_FORCE_IFORMAT_DOUBLE), so "0+ 1 2" is one number, then a failure:
+// an earlier hand-made scan took three there and let a COFF vertex CGAL reads as one number through (ASan in
+// CGAL's colour scan, found by fuzzing).
 bool cgal_ascii_double(std::istream& in, double* value) {
-  char c = 0;
-  do {
-    if (!in.get(c)) return false;
-  } while (std::isspace(static_cast<unsigned char>(c)));
-  std::string buffer;
-  if (c == '-') buffer += '-';
-  else if (c != '+') in.unget();
-  while (in.get(c)) {
-    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'E' || c == 'e' || c == '+' || c == '-') {
-      buffer += c;
-    } else {
-      in.unget();
-      break;
-    }
-  }
-  in.clear(in.rdstate() & ~std::ios_base::failbit);
   double d = 0;
-  if (std::sscanf(buffer.c_str(), "%lf", &d) != 1) {
-    in.setstate(std::ios_base::failbit);
-    return false;
-  }
+  if (!(in >> d)) return false;
   if (value) *value = d;
   return true;
 }
@@ -348,7 +332,7 @@ PlyHeader read_ply_header(const std::string& path) {
 // CGAL's PLY reader sizes each list by the count the file gives (vector::resize) before reading its items: a count
 // of 2^31 in a file of 700 bytes allocated 8 GB (found by fuzzing). The body is walked here first, element by
 // element as CGAL reads it (binary: the declared sizes and byte order; ASCII: the same extractions, `>>` for
-// integers and CGAL's scan for floating point), and a list longer than what the file has left is refused. Where
+// integers and floating point alike), and a list longer than what the file has left is refused. Where
 // CGAL's own reading would fail (a bad number, the end of the file, a negative count, which vector refuses), the walk
 // stops and leaves the message to the reader.
 bool ply_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
@@ -358,6 +342,10 @@ bool ply_signed_type(const std::string& t) {
 
 // An ASCII number as CGAL's PLY reader extracts one of type `t`: false where CGAL's extraction fails.
 bool ply_ascii_number(std::istream& in, const std::string& t, long long* value) {
+  if (t == "float" || t == "float32") {  // CGAL extracts a float: beyond its range the extraction fails
+    float f = 0;
+    return bool(in >> f);
+  }
   if (!ply_integer_type(t)) return cgal_ascii_double(in, nullptr);
   const std::size_t size = ply_type_size(t);
   const bool is_signed = ply_signed_type(t);
