@@ -286,6 +286,13 @@ TEST_F(BadInput, FuzzCoffLineWithoutColourAfterOnesWithIt) {
   expect_bad(write("plus.off", plus), "no faces (1 vertices, 0 faces)");  // the diagnosis of the whole file
   expect_bad(write("face.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 255 0 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 has no colour after faces with one");
+  // and a COFF file ending before its vertices or faces: CGAL read the colour of the missing line (UBSan: an offset
+  // applied to the null data of its empty vector of numbers; regression-d9172e41b69b, "1 0 0" and nothing after it)
+  const std::string ends = fuzz_input("off/regression-d9172e41b69b");
+  ASSERT_FALSE(ends.empty());
+  expect_bad(write("ends.off", ends), "truncated COFF file: it ends before vertex 0 of 1");
+  expect_bad(write("ends2.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 5\n3 0 1 3 5\n"),
+             "truncated COFF file: it ends before face 2 of 4");
   // Colours on every line, or on none, or from some line on, read as before.
   for (const char* ok : {"COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3 1\n3 0 3 2 2\n3 1 2 3 3\n",
                          "COFF\n4 4 0\n0 0 0 9\n1 0 0 9\n0 1 0 9\n0 0 1 9\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"})

@@ -335,10 +335,18 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
   // winding number when holes remain),
   // then the rest of the box from the band's closest points (exact feature transform).
   stage.restart();
+  // OpenVDB's trees allocate and clear a 4096^3-voxel root child (a 256 KB table) wherever they touch one, and
+  // meshToVolume builds six trees: a box straddling the index origin, as an object centred there does, touched
+  // eight of them in each (48 tables, 12 MB cleared for a tetrahedron at resolution 10: most of its time). The
+  // index space is shifted so that the box starts at voxel 64, inside one root child when it fits there.
+  const openvdb::Coord shift = openvdb::Coord(64) - box.min();
+  const openvdb::CoordBBox shifted_box(box.min() + shift, box.max() + shift);
   auto xf = openvdb::math::Transform::createLinearTransform(h);
+  xf->postTranslate(-openvdb::Vec3d(shift[0], shift[1], shift[2]) * h);
   std::vector<openvdb::Vec3d> pts(m.vertices.size());
   for (std::size_t i = 0; i < pts.size(); ++i)
-    pts[i] = openvdb::Vec3d(m.vertices[i][0] / h, m.vertices[i][1] / h, m.vertices[i][2] / h);
+    pts[i] = openvdb::Vec3d(m.vertices[i][0] / h + shift[0], m.vertices[i][1] / h + shift[1],
+                            m.vertices[i][2] / h + shift[2]);
   IndexMeshAdapter adapter{&pts, &m.faces};
   const float band = kBandVoxels;
   // All of OpenVDB's clean-up stays on: intersecting-voxel removal and renormalisation both decide signs
@@ -348,7 +356,8 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
   openvdb::FloatGrid::Ptr sdf =
       openvdb::tools::meshToVolume<openvdb::FloatGrid>(adapter, *xf, band, band, flags, &index_grid);
   stage.done("band+sign (meshToVolume)");
-  res.grid = dense_from_grid(*sdf, box, who);
+  res.grid = dense_from_grid(*sdf, shifted_box, who);
+  res.grid.origin = {box.min()[0] * h, box.min()[1] * h, box.min()[2] * h};  // exactly as without the shift
   stage.done("densify");
   {
     ScalarGrid& g = res.grid;
@@ -359,11 +368,11 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
     // (as OpenVDB found it); the feature transform then gives every vertex of the box — band included —
     // the distance to the best of these surface points (tests: error < 0.3 voxel at 128^3).
     auto iacc = index_grid.getConstAccessor();
-    const openvdb::Coord b0 = box.min();
+    const openvdb::Coord b0 = shifted_box.min();
     for (auto it = sdf->tree().cbeginValueOn(); it; ++it) {
       if (!it.isVoxelValue()) continue;
       const openvdb::Coord c = it.getCoord();
-      if (!box.isInside(c)) continue;
+      if (!shifted_box.isInside(c)) continue;
       const openvdb::Int32 tri = iacc.getValue(c);
       if (tri < 0 || std::size_t(tri) >= m.faces.size()) continue;
       const auto& f = m.faces[std::size_t(tri)];
@@ -379,7 +388,7 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
     detail::complete_by_feature_transform(g, known, sites, open ? &nearest : nullptr);
     stage.done("far field (feature transform)");
     if (open && !sites.empty()) {
-      const std::size_t direct = sign_by_winding_number(g, nearest, sites, m, b0);
+      const std::size_t direct = sign_by_winding_number(g, nearest, sites, m, box.min());
       std::ostringstream s;
       s << who << ": " << res.report.boundary_edges_remaining
         << " boundary edges remain open: inside/outside from the generalised winding number (|w| > 1/2; "

@@ -156,8 +156,18 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
     std::string line;
     bool vertex_colours = false, face_colours = false;
+    // At the end of the file CGAL's scanner finds no numbers yet still reads a COFF line's colour from them (UBSan,
+    // found by fuzzing: a COFF header "1 0 0" and nothing after it), so a truncated COFF file is refused here.
+    auto truncated = [&](const char* what, std::uintmax_t k, std::uintmax_t n) {
+      std::ostringstream s;
+      s << q(path) << ": truncated " << keyword << " file: it ends before " << what << " " << k << " of " << n;
+      return Error(s.str());
+    };
     for (std::uintmax_t v = 0; v < counts[0]; ++v) {
-      if (!next_line(line)) return;
+      if (!next_line(line)) {
+        if (colours) throw truncated("vertex", v, counts[0]);
+        return;
+      }
       std::istringstream ls(line);
       std::vector<double> numbers_read;
       for (double d; cgal_ascii_double(ls, &d);) numbers_read.push_back(d);
@@ -172,7 +182,10 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
       }
     }
     for (std::uintmax_t f = 0; f < counts[1]; ++f) {
-      if (!next_line(line)) return;
+      if (!next_line(line)) {
+        if (colours) throw truncated("face", f, counts[1]);
+        return;
+      }
       std::istringstream ls(line);
       std::vector<double> entries;
       for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
