@@ -357,7 +357,8 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
       openvdb::tools::meshToVolume<openvdb::FloatGrid>(adapter, *xf, band, band, flags, &index_grid);
   stage.done("band+sign (meshToVolume)");
   res.grid = dense_from_grid(*sdf, shifted_box, who);
-  res.grid.origin = {box.min()[0] * h, box.min()[1] * h, box.min()[2] * h};  // exactly as without the shift
+  res.grid.origin = {box.min()[0] * h, box.min()[1] * h, box.min()[2] * h};  // exactly as without the shift (the
+  res.grid.voxel_size = h;  // translated transform's voxel size comes out an ulp or so away from h)
   stage.done("densify");
   {
     ScalarGrid& g = res.grid;
