@@ -293,6 +293,25 @@ TEST_F(BadInput, FuzzCoffLineWithoutColourAfterOnesWithIt) {
   expect_bad(write("ends.off", ends), "truncated COFF file: it ends before vertex 0 of 1");
   expect_bad(write("ends2.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 5\n3 0 1 3 5\n"),
              "truncated COFF file: it ends before face 2 of 4");
+  // and an ST4OFF file: CGAL's scanner reads texture coordinates at an index it sets only for coloured files
+  // (UBSan, regression-3573396b1447). Homogeneous files with attributes are refused; other files with normals,
+  // colours or texture coordinates reach CGAL as the plain OFF of their coordinates and faces.
+  const std::string st4 = fuzz_input("off/regression-3573396b1447");
+  ASSERT_FALSE(st4.empty());
+  expect_bad(write("st4.off", st4), "ST4OFF (homogeneous coordinates with normals, colours or texture coordinates)");
+  const TriangleMesh plain = read_mesh(write("plain.off", kTetOff));
+  for (const char* variant :
+       {"STOFF\n4 4 0\n0 0 0 .5 .5\n1 0 0 0 1\n0 1 0 1 0\n0 0 1 1 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+        "NOFF\n4 4 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n0 0 1 0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+        "STCNOFF\n4 4 0\n0 0 0 0 0 1 9 .5 .5\n1 0 0 0 0 1 9 0 1\n0 1 0 0 0 1 9 1 0\n0 0 1 0 0 1 9 1 1\n"
+        "3 0 2 1 1 2 3\n3 0 1 3 1 2 3\n3 0 3 2 1 2 3\n3 1 2 3 1 2 3\n",
+        "4OFF\n4 4 0\n0 0 0 2\n2 0 0 2\n0 2 0 2\n0 0 2 2\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"}) {
+    const TriangleMesh m = read_mesh(write("variant.off", variant));
+    EXPECT_EQ(m.vertices, plain.vertices) << variant;
+    EXPECT_EQ(m.faces, plain.faces) << variant;
+  }
+  expect_bad(write("st_ends.off", "STOFF\n4 4 0\n0 0 0 .5 .5\n1 0 0 0 1\n"),
+             "truncated STOFF file: it ends before vertex 2 of 4");
   // Colours on every line, or on none, or from some line on, read as before.
   for (const char* ok : {"COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3 1\n3 0 3 2 2\n3 1 2 3 3\n",
                          "COFF\n4 4 0\n0 0 0 9\n1 0 0 9\n0 1 0 9\n0 0 1 9\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"})

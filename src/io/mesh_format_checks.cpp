@@ -56,7 +56,7 @@ bool cgal_ascii_double(std::istream& in, double* value) {
 // as its letters and digits, then either a count or the word BINARY after more comments: found by fuzzing, a
 // keyword ending in a non-alphanumeric byte and BINARY two lines below), and the counts CGAL will take must be
 // non-negative and fit the file (ASCII: 2 bytes an item; binary: 12 bytes a vertex, at least 4 a face).
-void check_off_header(const std::string& path, std::uintmax_t size) {
+std::string check_off_header(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
   auto skip_line = [&] {
     char c;
@@ -65,7 +65,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   };
   char c = 0;
   while ((in >> c) && c == '#') skip_line();
-  if (!in) return;  // no header: CGAL refuses it
+  if (!in) return {};  // no header: CGAL refuses it
   std::string keyword(1, c);
   while (keyword.size() < 41 && in.get(c) && std::isalnum(static_cast<unsigned char>(c))) keyword += c;
   std::size_t j = 0;
@@ -81,18 +81,18 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   if (homogeneous) ++j;
   const bool dimensional = j < keyword.size() && keyword[j] == 'n';
   if (dimensional) ++j;
-  if (keyword.compare(j, std::string::npos, "OFF") != 0) return;  // not OFF (SKEL, garbage): CGAL refuses it
+  if (keyword.compare(j, std::string::npos, "OFF") != 0) return {};  // not OFF (SKEL, garbage): CGAL refuses it
   auto check_edges = [&](long long edges) {
     if (edges < -1000000000LL || edges > 1000000000LL)
       throw Error(q(path) + ": OFF header announces " + std::to_string(edges) + " edges (malformed)");
   };
   while ((in >> c) && c == '#') skip_line();  // CGAL's skip_comment_OFF, then the next character
-  if (!in) return;
+  if (!in) return {};
   if (std::isdigit(static_cast<unsigned char>(c))) {  // ASCII counts, read as int by CGAL
     in.unget();
     if (dimensional) {  // the dimension first
       int dimension = 0;
-      if (!(in >> dimension)) return;
+      if (!(in >> dimension)) return {};
     }
     std::uintmax_t counts[2] = {0, 0};
     for (int i = 0; i < 2; ++i) {
@@ -114,9 +114,20 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     // (found by fuzzing: a face of -20 vertices). Such a face is refused here; where CGAL's own reading would
     // fail (no number, the end of the file), the check stops and leaves the message to the reader.
     int edges = 0;
-    if (!(in >> edges)) return;
+    if (!(in >> edges)) return {};
     check_edges(edges);
-    if (homogeneous || dimensional) return;  // other vertex layouts: CGAL refuses these bodies itself
+    if (dimensional) return {};  // CGAL refuses these bodies itself
+    // Normals, colours and texture coordinates: CGAL's scanner reads a colour past a line's numbers wherever an
+    // earlier line had one, and texture coordinates at an index it computes only for coloured files (uninitialised
+    // otherwise: UBSan, found by fuzzing, an ST4OFF file). None of them matter here, so CGAL is handed the plain
+    // OFF these lines make once checked (coordinates and faces only, numbers written back exactly).
+    const bool plain = textures || colours || normals;
+    if (plain && homogeneous)
+      throw Error(q(path) + ": " + keyword + " (homogeneous coordinates with normals, colours or texture coordinates)"
+                  " is not supported: write it as OFF or 4OFF");
+    std::ostringstream out;
+    out.precision(17);
+    if (plain) out << "OFF\n" << counts[0] << ' ' << counts[1] << " 0\n";
     auto next_line = [&](std::string& line) {
       while ((in >> c) && c == '#') skip_line();  // skip_comment_OFF
       if (!in) return false;
@@ -153,7 +164,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     };
     // A vertex line with fewer numbers than its coordinates, normal and texture coordinates: CGAL marks the stream
     // bad but still reads the texture coordinates from the line's numbers (found by fuzzing: none, on STOFF).
-    const std::size_t needed = 3 + (normals ? 3 : 0) + (textures ? 2 : 0);
+    const std::size_t needed = (homogeneous ? 4 : 3) + (normals ? 3 : 0) + (textures ? 2 : 0);
     std::string line;
     bool vertex_colours = false, face_colours = false;
     // At the end of the file CGAL's scanner finds no numbers yet still reads a COFF line's colour from them (UBSan,
@@ -165,8 +176,8 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     };
     for (std::uintmax_t v = 0; v < counts[0]; ++v) {
       if (!next_line(line)) {
-        if (colours) throw truncated("vertex", v, counts[0]);
-        return;
+        if (plain) throw truncated("vertex", v, counts[0]);
+        return {};
       }
       std::istringstream ls(line);
       std::vector<double> numbers_read;
@@ -180,18 +191,18 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
           << keyword << " vertex needs";
         throw Error(s.str());
       }
+      if (plain) out << numbers_read[0] << ' ' << numbers_read[1] << ' ' << numbers_read[2] << '\n';
     }
     for (std::uintmax_t f = 0; f < counts[1]; ++f) {
       if (!next_line(line)) {
-        if (colours) throw truncated("face", f, counts[1]);
-        return;
+        if (plain) throw truncated("face", f, counts[1]);
+        return {};
       }
       std::istringstream ls(line);
       std::vector<double> entries;
       for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
-      if (entries.empty() && colours)  // CGAL marks the stream bad but still reads the face's colour
-        throw Error(q(path) + ": face " + std::to_string(f) + " has no numbers");
-      if (entries.empty()) return;
+      if (entries.empty() && plain) throw Error(q(path) + ": face " + std::to_string(f) + " has no numbers");
+      if (entries.empty()) return {};
       auto bad = [&](double d) { return !(d >= 0 && d < 9e18); };
       if (bad(entries[0])) {
         std::ostringstream s;
@@ -212,8 +223,11 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
           s << q(path) << ": face " << f << " references vertex " << entries[k];
           throw Error(s.str());
         }
+      if (plain) {
+        for (std::size_t k = 0; k <= n; ++k) out << std::size_t(entries[k]) << (k < n ? ' ' : '\n');
+      }
     }
-    return;
+    return plain ? out.str() : std::string();
   }
   std::string word(1, c);
   while (word.size() < 41 && in.get(c) && std::isalnum(static_cast<unsigned char>(c))) word += c;
@@ -244,18 +258,18 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
   // reading its indices, so a negative or huge count (other than -1) allocated up to 16 GB. Each count is checked
   // against what the file has left. Vertices are big-endian floats: 3 coordinates (4 for 4OFF), 3 normal
   // components (4) for N, 2 texture coordinates (3) for ST; COFF colours are not read from binary files.
-  if (dimensional) return;  // CGAL refuses these bodies itself
+  if (dimensional) return {};  // CGAL refuses these bodies itself
   const std::uintmax_t per_vertex = 4 * ((homogeneous ? 4 : 3) + (normals ? (homogeneous ? 4 : 3) : 0) +
                                          (textures ? (homogeneous ? 3 : 2) : 0));
   const std::streamoff body = in.tellg();
-  if (body < 0 || std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex > size) return;  // CGAL stops at the end
+  if (body < 0 || std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex > size) return {};  // CGAL stops at the end
   std::uintmax_t at = std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex;
   in.seekg(std::streamoff(at));
   for (std::int64_t f = 0; f < nf; ++f) {
-    if (!in.read(reinterpret_cast<char*>(b), 4)) return;  // CGAL's read fails there and it refuses the file
+    if (!in.read(reinterpret_cast<char*>(b), 4)) return {};  // CGAL's read fails there and it refuses the file
     at += 4;
     const std::int64_t n = be32(0);
-    if (n == -1) return;  // CGAL's own "no face" check
+    if (n == -1) return {};  // CGAL's own "no face" check
     if (n < 0 || std::uintmax_t(n) * 4 > size - at) {
       std::ostringstream s;
       s << q(path) << ": binary OFF face " << f << " has " << n << " vertices, more than the " << (size - at)
@@ -265,6 +279,7 @@ void check_off_header(const std::string& path, std::uintmax_t size) {
     at += std::uintmax_t(n) * 4;
     in.seekg(std::streamoff(at));
   }
+  return {};
 }
 
 PlyHeader read_ply_header(const std::string& path) {

@@ -34,8 +34,9 @@ struct PlyHeader {
 PlyHeader read_ply_header(const std::string& path);
 // Refuses a list longer than what the file has left, before CGAL sizes it.
 void check_ply_lists(const std::string& path, const PlyHeader& header, std::uintmax_t size);
-// Refuses OFF headers and bodies CGAL would misread or size from counts the file cannot hold.
-void check_off_header(const std::string& path, std::uintmax_t size);
+// Refuses OFF headers and bodies CGAL would misread or size from counts the file cannot hold. For an ASCII file
+// with normals, colours or texture coordinates, returns the plain OFF text CGAL is to read instead (else empty).
+std::string check_off_header(const std::string& path, std::uintmax_t size);
 // After CGAL refused an ASCII file: names the first non-finite number, a face referencing a missing vertex, or
 // the absence of faces (throws Error); returns when it finds none of these.
 void diagnose_ascii(const std::string& path, const std::string& ext);

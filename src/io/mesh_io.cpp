@@ -120,6 +120,7 @@ TriangleMesh read_mesh(const std::string& path) {
   bool binary = false;
   PlyHeader ply;
   std::uint32_t stl_count = 0;
+  std::string plain_off;  // an OFF file's coordinates and faces, when CGAL is not to read its other attributes
   std::string format = ext.substr(1);
   for (auto& c : format) c = char(std::toupper(static_cast<unsigned char>(c)));
 
@@ -137,7 +138,7 @@ TriangleMesh read_mesh(const std::string& path) {
     }
     check_ply_lists(path, ply, size);
   } else if (ext == ".off") {
-    check_off_header(path, size);
+    plain_off = check_off_header(path, size);
   } else if (ext == ".stl") {
     binary = stl_is_binary(path, size, &stl_count);
     if (binary) {
@@ -153,7 +154,10 @@ TriangleMesh read_mesh(const std::string& path) {
 
   try {
     if (ext == ".obj") ok = CGAL::IO::read_OBJ(path, points, polygons);
-    else if (ext == ".off") ok = CGAL::IO::read_OFF(path, points, polygons);
+    else if (ext == ".off" && !plain_off.empty()) {
+      std::istringstream plain(plain_off);
+      ok = CGAL::IO::read_OFF(plain, points, polygons);
+    } else if (ext == ".off") ok = CGAL::IO::read_OFF(path, points, polygons);
     else if (ext == ".ply") ok = CGAL::IO::read_PLY(path, points, polygons);
     else if (ext == ".stl") ok = CGAL::IO::read_STL(path, points, polygons, CGAL::parameters::use_binary_mode(binary));
   } catch (const Error&) {
