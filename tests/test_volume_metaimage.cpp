@@ -436,7 +436,12 @@ TEST(MetaImageBadInput, FuzzFindingsAreRefusedBeforeMetaIOParsesTheHeader) {
   expect_bad(write_mha(d, "name.mha", "NDims = 3\n" + std::string(300, 'F') + " = 1\n" + rest, data), "header line 3 is 304 bytes");
   expect_bad(write_mha(d, "comment.mha", "NDims = 3\nComment = " + std::string(260, 'c') + "\n" + rest, data), "header line 3");
   // the corpus' own findings, as stored
-  for (const std::string name : {"regression-2642f2e70dbd", "regression-d3cb28ea4b4a", "regression-ndims-negative"}) {
+  // a name alone on its line: MetaIO takes the next line as its value, so an ElementDataFile line there does not end
+  // its header (regression-8cc5550860d4: a negative NDims further down, a timeout)
+  expect_bad(write_mha(d, "alone.mha", "Comment\nElementDataFile = LOCAL\nNDims = -1\n" + rest, data),
+             "('Comment') has no '=' and value");
+  for (const std::string name : {"regression-2642f2e70dbd", "regression-d3cb28ea4b4a", "regression-ndims-negative",
+                                 "regression-8cc5550860d4"}) {
     const std::string bytes = read_text(fs::path(CHOKELOOPS_SOURCE_DIR) / "fuzz" / "corpus" / "mha" / name);
     ASSERT_FALSE(bytes.empty()) << name;
     expect_bad(test::write_file(d, name + ".mha", bytes), name);

@@ -106,8 +106,16 @@ std::string trimmed(std::string s) {
 // ElementSpacing, Offset and TransformMatrix as NDims (NDims^2) numbers before it looks at NDims, so a
 // negative NDims loops ~2^64 times and one above 10 writes past its fixed arrays; and it copies field names
 // and values such as Comment into 255-byte buffers unchecked. So before MetaIO sees the file, the header's
-// lines (up to the ElementDataFile line that ends it) must be shorter than 255 bytes, and NDims, found as
-// MetaIO finds it, must be a plain integer from 1 to 10 on its own line.
+// lines (up to the ElementDataFile line that ends it) must be shorter than 255 bytes, each must hold a name and a
+// value, and NDims, found as MetaIO finds it, must be a plain integer from 1 to 10 on its own line.
+// A field name as a one-line message may show it: control and non-ASCII bytes as '?', at most 40 characters.
+std::string printable_name(std::string s) {
+  if (s.size() > 40) s = s.substr(0, 37) + "...";
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
+  return s;
+}
+
 void check_header_before_metaio(const std::string& path, std::istream& in) {
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
@@ -118,8 +126,15 @@ void check_header_before_metaio(const std::string& path, std::istream& in) {
     const auto sep = line.find_first_of("=:\r");
     const std::string key = trimmed(line.substr(0, sep));
     if (key == "ElementDataFile") break;
+    const bool no_value = sep == std::string::npos || line[sep] == '\r';
+    // A name alone on its line takes the next line as its value in MetaIO, so that line is no field of its own:
+    // an ElementDataFile there did not end MetaIO's header, and a negative NDims further down looped ~2^64 times
+    // (found by fuzzing, regression-8cc5550860d4). A header line must hold a name and its value.
+    if (no_value && key != "NDims" && !key.empty())
+      fail(path, "header line " + std::to_string(number) + " ('" + printable_name(key) +
+                     "') has no '=' and value: not a readable MetaImage header");
     if (key != "NDims") continue;
-    const std::string value = sep == std::string::npos || line[sep] == '\r' ? "" : trimmed(line.substr(sep + 1));
+    const std::string value = no_value ? "" : trimmed(line.substr(sep + 1));
     char* end = nullptr;
     const long n = std::strtol(value.c_str(), &end, 10);
     if (value.empty() || *end != '\0' || n < 1 || n > 10)
