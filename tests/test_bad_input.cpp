@@ -312,6 +312,17 @@ TEST_F(BadInput, FuzzCoffLineWithoutColourAfterOnesWithIt) {
   }
   expect_bad(write("st_ends.off", "STOFF\n4 4 0\n0 0 0 .5 .5\n1 0 0 0 1\n"),
              "truncated STOFF file: it ends before vertex 2 of 4");
+  // and an nOFF file, whose body CGAL reads as an OFF body after the dimension (UBSan: a face of 3.7e20 vertices
+  // converted to std::size_t, regression-f64bbfd78589)
+  const std::string n_off = fuzz_input("off/regression-f64bbfd78589");
+  ASSERT_FALSE(n_off.empty());
+  CliRun n_run = run_cli("'" + write("n.off", n_off) + "' -o '" + out + "' --resolution 16");
+  EXPECT_EQ(n_run.code, 2) << n_run.err;
+  EXPECT_EQ(n_run.err.find('\n'), n_run.err.size() - 1) << n_run.err;
+  expect_bad(write("n2.off", "nOFF\n3\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n-3 0 3 2\n3 1 2 3\n"),
+             "face 2 has -3 vertices");
+  EXPECT_EQ(read_mesh(write("n3.off", "nOFF\n3\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"))
+                .faces.size(), 4u);
   // Colours on every line, or on none, or from some line on, read as before.
   for (const char* ok : {"COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3 1\n3 0 3 2 2\n3 1 2 3 3\n",
                          "COFF\n4 4 0\n0 0 0 9\n1 0 0 9\n0 1 0 9\n0 0 1 9\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"})
