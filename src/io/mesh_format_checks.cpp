@@ -262,11 +262,20 @@ std::string check_off_header(const std::string& path, std::uintmax_t size) {
   const std::uintmax_t per_vertex = 4 * ((homogeneous ? 4 : 3) + (normals ? (homogeneous ? 4 : 3) : 0) +
                                          (textures ? (homogeneous ? 3 : 2) : 0));
   const std::streamoff body = in.tellg();
-  if (body < 0 || std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex > size) return {};  // CGAL stops at the end
+  // At the end of the file CGAL's binary reads leave their int32 uninitialised and it goes on with it (its check
+  // lets a stream at its end pass): a face count read from nothing sized a face at 11 GB (found by fuzzing). A file
+  // that ends before its vertices and faces do is refused here.
+  auto truncated = [&](const char* what) {
+    std::ostringstream s;
+    s << q(path) << ": truncated binary OFF file: it ends inside its " << what << " (" << nv << " vertices, " << nf
+      << " faces announced)";
+    return Error(s.str());
+  };
+  if (body < 0 || std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex > size) throw truncated("vertices");
   std::uintmax_t at = std::uintmax_t(body) + std::uintmax_t(nv) * per_vertex;
   in.seekg(std::streamoff(at));
   for (std::int64_t f = 0; f < nf; ++f) {
-    if (!in.read(reinterpret_cast<char*>(b), 4)) return {};  // CGAL's read fails there and it refuses the file
+    if (!in.read(reinterpret_cast<char*>(b), 4)) throw truncated("faces");
     at += 4;
     const std::int64_t n = be32(0);
     if (n == -1) return {};  // CGAL's own "no face" check
