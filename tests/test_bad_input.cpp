@@ -232,6 +232,14 @@ TEST_F(BadInput, FuzzPlyPropertyBeforeAnyElement) {
   expect_bad(write("kw.ply", "ply\nformat ascii 1.0\neleme\x9b\x8b rtex 8\nend_header\n"), "malformed PLY header line");
   expect_bad(write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty fl3oat x\nend_header\n0\n"),
              "unknown type");
+  // Found next (a timeout): a vertex element whose properties are all on its own line, so it declares none, and
+  // 1777777777 items: each reads nothing, and CGAL made a point for each (regression-06085fdc3510).
+  const std::string none = fuzz_input("ply/regression-06085fdc3510");
+  ASSERT_FALSE(none.empty());
+  expect_bad(write("none.ply", none), "PLY element 'vle_?ttle_endian' announces 1 items but declares no property");
+  expect_bad(write("none2.ply", "ply\nformat ascii 1.0\nelement vertex 1777777777 property float x\n"
+                                "element face 0\nproperty list uchar int vertex_indices\nend_header\n"),
+             "PLY element 'vertex' announces 1777777777 items but declares no property");
 }
 
 TEST_F(BadInput, FuzzOffCountsBeyondInt) {
