@@ -592,6 +592,14 @@ TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
   // the same files with a true count still read
   EXPECT_EQ(read_mesh(write("good.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" +
                                             tri + "3 0 1 2\n")).faces.size(), 1u);
+  // Found next (libFuzzer's 2 GB RSS limit): an ASCII list count of 42 digits; the extraction fails but leaves
+  // INT_MAX, and CGAL sizes the list by it before it looks at the stream (regression-40444d22dd05).
+  const std::string digits = fuzz_input("ply/regression-40444d22dd05");
+  ASSERT_FALSE(digits.empty());
+  expect_bad(write("digits.ply", digits), "PLY list of 2147483647 items in element 0");
+  expect_bad(write("digits2.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tri +
+                                      "99999999999999999999 0 1 2\n"),
+             "PLY list of 2147483647 items");
 }
 
 TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {

@@ -395,15 +395,19 @@ bool ply_ascii_number(std::istream& in, const std::string& t, long long* value) 
   if (!ply_integer_type(t)) return cgal_ascii_double(in, nullptr);
   const std::size_t size = ply_type_size(t);
   const bool is_signed = ply_signed_type(t);
+  // A failed extraction still stores a value (0 without digits, the type's limit on overflow), and CGAL sizes a list
+  // by it before it looks at the stream: `value` is that value either way (found by fuzzing: a list count of 42
+  // digits became INT_MAX, 2 GB of items).
   long long v = 0;
-  if (size == 1 && is_signed) { short x; if (!(in >> x)) return false; v = static_cast<signed char>(x); }
-  else if (size == 1) { unsigned short x; if (!(in >> x)) return false; v = static_cast<unsigned char>(x); }
-  else if (size == 2 && is_signed) { short x; if (!(in >> x)) return false; v = x; }
-  else if (size == 2) { unsigned short x; if (!(in >> x)) return false; v = x; }
-  else if (is_signed) { std::int32_t x; if (!(in >> x)) return false; v = x; }
-  else { std::uint32_t x; if (!(in >> x)) return false; v = x; }
+  bool ok = true;
+  if (size == 1 && is_signed) { short x = 0; ok = bool(in >> x); v = static_cast<signed char>(x); }
+  else if (size == 1) { unsigned short x = 0; ok = bool(in >> x); v = static_cast<unsigned char>(x); }
+  else if (size == 2 && is_signed) { short x = 0; ok = bool(in >> x); v = x; }
+  else if (size == 2) { unsigned short x = 0; ok = bool(in >> x); v = x; }
+  else if (is_signed) { std::int32_t x = 0; ok = bool(in >> x); v = x; }
+  else { std::uint32_t x = 0; ok = bool(in >> x); v = x; }
   if (value) *value = v;
-  return true;
+  return ok;
 }
 
 void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t size) {
@@ -440,10 +444,11 @@ void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t
         const std::size_t item = ply_type_size(p.type);
         if (ascii) {
           long long n = 1;
-          if (!ply_ascii_number(in, p.count_type.empty() ? p.type : p.count_type, &n)) return;
+          const bool read = ply_ascii_number(in, p.count_type.empty() ? p.type : p.count_type, &n);
+          if (!p.count_type.empty() && n > 0 && std::uintmax_t(n) > left() / 2 + 1) refuse(n, e);  // an item and a separator each
+          if (!read) return;
           if (p.count_type.empty()) continue;
           if (n < 0) return;
-          if (std::uintmax_t(n) > left() / 2 + 1) refuse(n, e);  // an item and a separator each
           for (long long k = 0; k < n; ++k)
             if (!ply_ascii_number(in, p.type, nullptr)) return;
           continue;
