@@ -3,15 +3,12 @@
 // the exact feature transform), on tiny meshes so that each input stays cheap. The readers are fuzzed by
 // fuzz_mesh_reader.cpp; here the bytes are decoded straight into a TriangleMesh, as read_mesh() would return
 // it, so that mutations change the geometry and the connectivity rather than the syntax:
-//   byte 0        number of vertices, 1 + (byte % kMaxVertices)
+//   byte 0        number of vertices, 1 + (byte % kMeshLevelsetMaxVertices)
 //   byte 1        binary exponent of the coordinates' unit, (int8) clamped to [-90, 90]: tiny and huge objects
 //   then          3 int16 (little endian) per vertex, times that unit (missing bytes read as 0)
-//   the rest      faces, 3 bytes each: vertex index % the number of vertices (at most kMaxFaces faces)
-// The grid is kResolution voxels along the longest side, on one thread, with a memory guard of 64^3.
+//   the rest      faces, 3 bytes each: vertex index % the number of vertices (at most kMeshLevelsetMaxFaces faces)
+// The grid is kMeshLevelsetResolution voxels along the longest side, on one thread, with a memory guard of 64^3.
 // The only acceptable failure is chokeloops::Error (bad input, exit code 2; resources, exit code 3).
-#include <algorithm>
-#include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -19,39 +16,16 @@
 
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/grid.h"
-#include "chokeloops/io/mesh_io.h"
-
-namespace {
-constexpr std::size_t kMaxVertices = 24;
-constexpr std::size_t kMaxFaces = 48;
-constexpr int kResolution = 10;
-}  // namespace
+#include "mesh_levelset_decode.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-  if (size < 2) return 0;
-  const std::size_t nv = 1 + data[0] % kMaxVertices;
-  const int exponent = std::clamp(int(static_cast<std::int8_t>(data[1])), -90, 90);
-  const double unit = std::ldexp(1.0, exponent);
-  std::size_t pos = 2;
-  auto byte = [&]() -> std::uint8_t { return pos < size ? data[pos++] : 0; };
-  chokeloops::TriangleMesh mesh;
-  mesh.vertices.resize(nv);
-  for (auto& v : mesh.vertices)
-    for (double& x : v) {
-      const std::uint8_t lo = byte(), hi = byte();
-      x = double(static_cast<std::int16_t>(std::uint16_t(lo | (hi << 8)))) * unit;
-    }
-  while (pos + 3 <= size && mesh.faces.size() < kMaxFaces) {
-    std::array<int, 3> f{};
-    for (int& i : f) i = int(data[pos++] % nv);
-    mesh.faces.push_back(f);
-  }
+  const chokeloops::TriangleMesh mesh = chokeloops::fuzz::decode_mesh_levelset_mesh(data, size);
   if (mesh.faces.empty()) return 0;  // read_mesh() refuses a mesh without faces
   try {
     chokeloops::LevelSetOptions o;
     o.quiet = true;
-    o.resolution = kResolution;
+    o.resolution = chokeloops::fuzz::kMeshLevelsetResolution;
     o.max_memory = chokeloops::estimate_levelset_bytes(64 * 64 * 64);
     chokeloops::mesh_to_levelset(mesh, o, "fuzz");
   } catch (const chokeloops::Error&) {

@@ -22,6 +22,7 @@
 #include "chokeloops/io/mesh_io.h"
 #include "chokeloops/io/vdb_io.h"
 #include "io/vdb_guard.h"
+#include "../fuzz/mesh_levelset_decode.h"
 #include "../fuzz/vdb_levelset_decode.h"
 
 namespace fs = std::filesystem;
@@ -526,6 +527,30 @@ TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
   EXPECT_GE(vdb_guard_nodes_freed() - before, 10u) << "of " << cuts << " cuts";
   // and the whole file still reads
   EXPECT_GT(read_vdb_float_grid(write("whole.vdb", bunny), "")->activeVoxelCount(), 0u);
+}
+
+TEST_F(BadInput, FuzzTouchingComponentsDoNotHangTheOrientation) {
+  // Found by fuzzing (fuzz_mesh_levelset, a hang): CGAL's orient_to_bound_a_volume decides the nesting of several
+  // components by casting rays from a point of each through the others, and retries random rays for as long as
+  // every ray is indeterminate, for ever when that point lies on another component. Components that touch or cross
+  // keep their orientation; the conversion then finishes (regression-c5929ddc1ef0: 8 vertices at 2^80, 48 faces).
+  const std::string bytes = fuzz_input("mesh_levelset/regression-c5929ddc1ef0");
+  ASSERT_FALSE(bytes.empty());
+  const TriangleMesh mesh =
+      fuzz::decode_mesh_levelset_mesh(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+  ASSERT_EQ(mesh.faces.size(), 48u);
+  MeshRepairOptions ro;
+  const RepairedMesh repaired = repair_mesh(mesh, "touching", ro);
+  EXPECT_TRUE(repaired.report.self_intersecting);
+  LevelSetOptions o;
+  o.quiet = true;
+  o.resolution = fuzz::kMeshLevelsetResolution;
+  try {
+    const LevelSetResult r = mesh_to_levelset(mesh, o, "touching");
+    EXPECT_FALSE(r.grid.values.empty());
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2) << e.what();
+  }
 }
 
 TEST_F(BadInput, FuzzFogWhoseBackgroundIsDenserThanTheIsoValueIsRefused) {

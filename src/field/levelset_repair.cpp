@@ -51,6 +51,13 @@ bool has_flat_component(SMesh& m) {
   return false;
 }
 
+std::size_t count_components(SMesh& m) {
+  auto component = m.add_property_map<SMesh::Face_index, std::size_t>("f:chokeloops_count", 0).first;
+  const std::size_t n = PMP::connected_components(m, component);
+  m.remove_property_map(component);
+  return n;
+}
+
 std::uint64_t edge_key(std::size_t a, std::size_t b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(a) << 32) | std::uint64_t(b);
@@ -323,16 +330,27 @@ RepairedMesh repair_mesh(const TriangleMesh& mesh, const std::string& name, cons
   // 6. outward orientation of closed meshes (nested components alternate). CGAL's orientation looks at
   // the extreme vertex of each component and is undefined (an assertion, then a crash) on a component that
   // encloses no volume: all its points coplanar. Such a mesh is left as it is (found by fuzzing).
+  // It also decides the nesting of several components by casting rays from a point of each through the others,
+  // and retries random rays for as long as every ray is indeterminate: for ever when that point lies on another
+  // component, as where components touch or cross (found by fuzzing: a hang). Such a mesh keeps its orientation.
+  bool intersection_checked = false;
   if (r.boundary_edges_remaining == 0 && !has_flat_component(sm)) {
-    try {
-      PMP::orient_to_bound_a_volume(sm);
-    } catch (const std::exception&) {
+    bool nesting_defined = true;
+    if (count_components(sm) > 1) {
+      r.self_intersecting = PMP::does_self_intersect(sm);
+      intersection_checked = true;
+      nesting_defined = !r.self_intersecting;
+    }
+    if (nesting_defined) {
+      try {
+        PMP::orient_to_bound_a_volume(sm);
+      } catch (const std::exception&) {
+      }
     }
   }
-  if (options.check_self_intersections) {
-    r.self_intersecting = PMP::does_self_intersect(sm);
-    if (r.self_intersecting) out.warnings.push_back(who + ": the surface intersects itself");
-  }
+  if (options.check_self_intersections && !intersection_checked) r.self_intersecting = PMP::does_self_intersect(sm);
+  if (options.check_self_intersections && r.self_intersecting)
+    out.warnings.push_back(who + ": the surface intersects itself");
 
   fill_topology(sm, r);
   out.mesh = to_triangle_mesh(sm);

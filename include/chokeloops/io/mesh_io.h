@@ -38,7 +38,7 @@ struct MeshReport {
   std::size_t holes_filled = 0;                      // boundary cycles closed by hole filling
   std::size_t boundary_edges_remaining = 0;          // border edges after hole filling
   bool closed = false;                               // input (after repair, before filling) has no border
-  bool self_intersecting = false;                    // only checked when check_self_intersections
+  bool self_intersecting = false;  // checked when check_self_intersections, and before nesting several closed components
   std::size_t components = 0;
   int euler = 0;                                     // V - E + F of the repaired mesh
   int genus = -1;                                    // sum over components of (2 - chi)/2 when closed, else -1
