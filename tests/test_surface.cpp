@@ -207,3 +207,61 @@ TEST(Surface, EmptyWhenNothingCrosses) {
   EXPECT_FALSE(so.closed_manifold);
   EXPECT_EQ(so.component_genus, std::vector<int>{-1});
 }
+
+// The counts on meshes that are not closed manifolds, each kind alone, with the numbers worked out by hand.
+TEST(Surface, StatisticsOfBrokenMeshesCountEachDefect) {
+  const std::vector<std::array<double, 3>> tet_vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::vector<std::array<int, 3>> tet_faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};  // outward
+  SurfaceMesh tet;
+  tet.vertices = tet_vertices, tet.faces = tet_faces;
+  expect_closed_topology(surface_stats(tet), 1, 0);
+  EXPECT_NEAR(surface_stats(tet).enclosed_volume, 1.0 / 6, 1e-12);
+
+  // Two tetrahedra sharing only vertex 0: a vertex with two fans, every edge fine.
+  SurfaceMesh bowtie = tet;
+  for (int k = 1; k < 4; ++k) bowtie.vertices.push_back({-tet_vertices[k][0], -tet_vertices[k][1], -tet_vertices[k][2]});
+  for (auto f : tet_faces) {
+    for (int& v : f) v = v == 0 ? 0 : v + 3;
+    bowtie.faces.push_back({f[0], f[2], f[1]});  // mirrored: flip to keep it outward
+  }
+  SurfaceStats s = surface_stats(bowtie);
+  EXPECT_EQ(s.edges, 12);
+  EXPECT_EQ(s.nonmanifold_vertices, 1);
+  EXPECT_EQ(s.nonmanifold_edges + s.boundary_edges + s.inconsistent_edges, 0);
+  EXPECT_EQ(s.components, 1);
+  EXPECT_FALSE(s.closed_manifold);
+  EXPECT_EQ(s.component_genus, std::vector<int>{-1});
+
+  // Three triangles on one edge (a book): one non-manifold edge, six boundary edges.
+  SurfaceMesh book;
+  book.vertices = {{0, 0, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}};
+  book.faces = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  s = surface_stats(book);
+  EXPECT_EQ(s.edges, 7);
+  EXPECT_EQ(s.nonmanifold_edges, 1);
+  EXPECT_EQ(s.boundary_edges, 6);
+  EXPECT_FALSE(s.closed_manifold);
+
+  // A tetrahedron with one face turned over: its three edges are used twice in one direction.
+  SurfaceMesh flipped = tet;
+  flipped.faces[3] = {1, 3, 2};
+  s = surface_stats(flipped);
+  EXPECT_EQ(s.inconsistent_edges, 3);
+  EXPECT_EQ(s.boundary_edges + s.nonmanifold_edges, 0);
+  EXPECT_FALSE(s.closed_manifold);
+  EXPECT_EQ(s.component_genus, std::vector<int>{-1});
+
+  // A square of two triangles and, apart, a closed tetrahedron: two components, one of them closed.
+  SurfaceMesh two = tet;
+  const int o = int(two.vertices.size());
+  for (auto p : std::vector<std::array<double, 3>>{{5, 0, 0}, {6, 0, 0}, {6, 1, 0}, {5, 1, 0}}) two.vertices.push_back(p);
+  two.faces.push_back({o, o + 1, o + 2});
+  two.faces.push_back({o, o + 2, o + 3});
+  s = surface_stats(two);
+  EXPECT_EQ(s.components, 2);
+  EXPECT_EQ(s.boundary_edges, 4);
+  EXPECT_EQ(s.edges, 6 + 5);
+  EXPECT_EQ(s.component_genus, (std::vector<int>{0, -1}));
+  EXPECT_EQ(s.genus, 0);
+  EXPECT_EQ(s.euler, 2 + 1);
+}

@@ -81,11 +81,11 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   r.timings_ms["chokes"] = ms_since(t);
 
   stage("surface", 0);
-  extract_checked_surface(r);
+  MeshAdjacency adjacency = extract_checked_surface(r);
 
   t = Clock::now();
   stage("loops", 0);
-  LoopContext context = prepare_loops(r);
+  LoopContext context = prepare_loops(r, std::move(adjacency));
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
                         r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
   r.timings_ms["loops"] = ms_since(t);
@@ -203,10 +203,11 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   return r;
 }
 
-void extract_checked_surface(AnalyzeResult& r) {
+MeshAdjacency extract_checked_surface(AnalyzeResult& r) {
   const auto t = Clock::now();
   r.surface = extract_zero_surface(r.grid);
-  r.surface_stats = surface_stats(r.surface);
+  MeshAdjacency adjacency = build_adjacency(r.surface);
+  r.surface_stats = surface_stats(r.surface, adjacency);
   r.timings_ms["surface"] = ms_since(t);
   const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
   const bool injected = fault && std::string(fault) == "self-check";
@@ -215,11 +216,12 @@ void extract_checked_surface(AnalyzeResult& r) {
                         std::to_string(r.chokes.handle_generators) + " handle generators");
   if (!r.surface_stats.closed_manifold)
     r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
+  return adjacency;
 }
 
-LoopContext prepare_loops(const AnalyzeResult& r) {
+LoopContext prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency) {
   LoopContext context;
-  context.adjacency = build_adjacency(r.surface);
+  context.adjacency = std::move(adjacency);
   bool any_generator = false;
   for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
   // One topology of the surface serves the choice of every generator's curve and the check after.

@@ -46,7 +46,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
   r.timings_ms["chokes"] = ms(t);
   stage("surface", 0);
-  extract_checked_surface(r);
+  MeshAdjacency surface_adjacency = extract_checked_surface(r);
 
   t = Clock::now();
   stage("channels", 0);
@@ -62,7 +62,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
 
   t = Clock::now();
   stage("loops", 0);
-  LoopContext context = prepare_loops(r);
+  LoopContext context = prepare_loops(r, std::move(surface_adjacency));
   const MeshAdjacency& adjacency = context.adjacency;
   SurfaceTopology* topology = context.topology.get();
   r.loops.assign(r.chokes.chokes.size(), Loop{});

@@ -13,10 +13,11 @@
 
 namespace chokeloops {
 
-// The surface stage: r.surface and r.surface_stats from r.grid, timed as "surface". A closed surface whose
-// genus differs from the handle generators is a bug (InternalError; CHOKELOOPS_TEST_FAULT=self-check forces
-// it, so that tests see how a bug is reported); an open one gets a warning.
-void extract_checked_surface(AnalyzeResult& r);
+// The surface stage: r.surface and r.surface_stats from r.grid, timed as "surface"; returns the surface's
+// adjacency, which the statistics are read from and the loop stage reuses. A closed surface whose genus
+// differs from the handle generators is a bug (InternalError; CHOKELOOPS_TEST_FAULT=self-check forces it, so
+// that tests see how a bug is reported); an open one gets a warning.
+MeshAdjacency extract_checked_surface(AnalyzeResult& r);
 
 // What the loop stage shares between all chokes: the surface's adjacency, and its topology when some choke
 // is a generator (the choice of a generator's curve and the check below need it).
@@ -24,7 +25,7 @@ struct LoopContext {
   MeshAdjacency adjacency;
   std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
 };
-LoopContext prepare_loops(const AnalyzeResult& r);
+LoopContext prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency);
 
 // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks that
 // it did; a generator loop that became contractible is reported as missing. Loops with `skip[i]` set (when

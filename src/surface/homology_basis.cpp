@@ -19,9 +19,9 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
     const int c = face_label[f];
     return c >= 0 && closed[c];
   };
-  // Any spanning trees serve. Built by union-find over the edges in half-edge order, they read the mesh
-  // front to back; a breadth-first search jumps across it, and on surfaces of millions of faces its cache
-  // misses were most of the time.
+  // Any spanning trees serve. The primal one is built by union-find over the edges in half-edge order, which
+  // reads the mesh front to back; a breadth-first search jumps across it, and on surfaces of millions of
+  // faces its cache misses were most of the time.
   {  // Primal tree over the vertices.
     UnionFind vertices{std::size_t(V)};
     for (int h = 0; h < 3 * F; ++h) {
@@ -31,44 +31,37 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
       if (vertices.unite(tri[h % 3], tri[(h + 1) % 3])) code_[h] = code_[t] = kTree;
     }
   }
-  // Cotree over the faces, through the edges not in the tree.
-  constexpr std::int32_t kCotree = -3;
-  {
-    UnionFind faces{std::size_t(F)};
-    for (int h = 0; h < 3 * F; ++h) {
-      const int t = adj.twin[h];
-      if (t < h || code_[h] != kUnset || !in_basis(MeshAdjacency::face(h))) continue;
-      if (faces.unite(MeshAdjacency::face(h), MeshAdjacency::face(t))) code_[h] = code_[t] = kCotree;
-    }
-  }
-  // Each cotree rooted at its first face and numbered depth first; a cotree edge gets the code of the face
-  // below it, which also keeps a child from walking back to its parent.
-  std::vector<int> parent(F, -1), order, stack;
-  order.reserve(std::size_t(F));
+  // Cotree over the faces, through the edges not in the tree, rooted at each component's first face and
+  // numbered depth first as it grows: a face joins when it is first reached, so that the faces below it are
+  // numbered right after it, and a marker (~f) pushed under its children closes its interval when they are
+  // done. A cotree edge gets the code of the face below it.
+  std::vector<int> stack;
+  std::vector<char> reached(std::size_t(F), 0);
   std::int32_t counter = 0;
   for (int root = 0; root < F; ++root) {
-    if (first_[root] >= 0 || !in_basis(root)) continue;
+    if (reached[std::size_t(root)] || !in_basis(root)) continue;
+    reached[std::size_t(root)] = 1;
     stack.assign(1, root);
     while (!stack.empty()) {
       const int f = stack.back();
       stack.pop_back();
+      if (f < 0) {
+        last_[~f] = counter - 1;
+        continue;
+      }
       first_[f] = counter++;
-      order.push_back(f);
+      stack.push_back(~f);
       for (int k = 0; k < 3; ++k) {
         const int h = 3 * f + k;
-        if (code_[h] != kCotree) continue;
+        if (code_[h] != kUnset) continue;
         const int t = adj.twin[h], g = MeshAdjacency::face(t);
-        parent[g] = f;
+        if (reached[std::size_t(g)]) continue;
+        reached[std::size_t(g)] = 1;
         code_[h] = code_[t] = 2 * g + 1;
         stack.push_back(g);
       }
     }
   }
-  // last_ = first_ + subtree size - 1: sizes gathered from the leaves up (reverse preorder).
-  std::vector<std::int32_t> size(F, 1);
-  for (auto it = order.rbegin(); it != order.rend(); ++it)
-    if (parent[*it] >= 0) size[parent[*it]] += size[*it];
-  for (int f : order) last_[f] = first_[f] + size[f] - 1;
   // Leftover edges, numbered component by component.
   leftover_start_.assign(components + 1, 0);
   std::vector<std::vector<int>> per_component(components);

@@ -70,81 +70,72 @@ void build_vertex_cells(const SurfaceMesh& mesh, MeshAdjacency& A) {
 }
 }  // namespace
 
-std::vector<EdgeHalfedge> halfedges_by_edge(const SurfaceMesh& mesh) {
-  const std::size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
-  auto key_of = [&](std::size_t h) {
-    const auto& t = mesh.faces[h / 3];
-    const int a = t[h % 3], b = t[(h + 1) % 3];
-    return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b));
-  };
-  std::vector<int> start(nv + 1, 0);
-  for (std::size_t h = 0; h < 3 * nf; ++h) ++start[(key_of(h) >> 32) + 1];
+void vertex_faces(const SurfaceMesh& mesh, std::vector<int>& start, std::vector<int>& faces) {
+  const std::size_t nv = mesh.vertices.size(), nf = mesh.faces.size();
+  start.assign(nv + 1, 0);
+  for (auto& t : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++start[std::size_t(t[k]) + 1];
   for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<EdgeHalfedge> he(3 * nf);
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (std::size_t h = 0; h < 3 * nf; ++h) {
-      const std::uint64_t key = key_of(h);
-      he[std::size_t(fill[key >> 32]++)] = {key, int(h)};
+  faces.resize(3 * nf);
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) faces[std::size_t(fill[std::size_t(mesh.faces[f][k])]++)] = int(f);
+}
+
+void halfedges_at(const SurfaceMesh& mesh, const std::vector<int>& vf, int begin, int end, int v,
+                  std::vector<HalfedgeAt>& out) {
+  out.clear();
+  for (int i = begin; i < end; ++i) {
+    const int f = vf[std::size_t(i)];
+    if (i > begin && vf[std::size_t(i - 1)] == f) continue;  // a face with two corners at v: read it once
+    const auto& t = mesh.faces[std::size_t(f)];
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (a == v) out.push_back({b, 3 * f + k});
+      else if (b == v) out.push_back({a, 3 * f + k});
     }
   }
-  // Each bucket holds a vertex's few edges in rising h: a stable insertion sort by key finishes the order.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t v = r.begin(); v < r.end(); ++v)
-      for (int i = start[v] + 1; i < start[v + 1]; ++i) {
-        const EdgeHalfedge x = he[std::size_t(i)];
-        int j = i;
-        for (; j > start[v] && he[std::size_t(j - 1)].key > x.key; --j) he[std::size_t(j)] = he[std::size_t(j - 1)];
-        he[std::size_t(j)] = x;
-      }
+  std::sort(out.begin(), out.end(), [](const HalfedgeAt& x, const HalfedgeAt& y) {
+    return x.other != y.other ? x.other < y.other : x.h < y.h;
   });
-  return he;
 }
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
   MeshAdjacency A;
-  const size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
-  const std::vector<EdgeHalfedge> he = halfedges_by_edge(mesh);
+  const std::size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
+  vertex_faces(mesh, A.vf_start, A.vf);
   A.twin.assign(3 * nf, -1);
   A.vv_start.assign(nv + 1, 0);
-  size_t nedges = 0;
-  for (size_t i = 0; i < he.size();) {
-    size_t j = i;
-    while (j < he.size() && he[j].key == he[i].key) ++j;
-    if (j - i == 2) {
-      A.twin[he[i].h] = he[i + 1].h;
-      A.twin[he[i + 1].h] = he[i].h;
+  // Each edge is read at its smaller end, so every twin is written once.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<HalfedgeAt> at;
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      halfedges_at(mesh, A.vf, A.vf_start[v], A.vf_start[v + 1], int(v), at);
+      int neighbours = 0;
+      for (std::size_t i = 0; i < at.size();) {
+        std::size_t j = i;
+        while (j < at.size() && at[j].other == at[i].other) ++j;
+        ++neighbours;
+        if (j - i == 2 && at[i].other >= int(v)) {
+          A.twin[std::size_t(at[i].h)] = at[i + 1].h;
+          A.twin[std::size_t(at[i + 1].h)] = at[i].h;
+        }
+        i = j;
+      }
+      A.vv_start[v + 1] = neighbours;
     }
-    ++A.vv_start[(he[i].key >> 32) + 1];
-    ++A.vv_start[(he[i].key & 0xffffffffu) + 1];
-    ++nedges;
-    i = j;
-  }
-  for (size_t v = 0; v < nv; ++v) A.vv_start[v + 1] += A.vv_start[v];
-  A.vv.resize(2 * nedges);
-  {
-    std::vector<int> fill(A.vv_start.begin(), A.vv_start.end() - 1);
-    for (size_t i = 0; i < he.size();) {
-      size_t j = i;
-      while (j < he.size() && he[j].key == he[i].key) ++j;
-      int a = int(he[i].key >> 32), b = int(he[i].key & 0xffffffffu);
-      A.vv[fill[a]++] = b;
-      A.vv[fill[b]++] = a;
-      i = j;
+  });
+  for (std::size_t v = 0; v < nv; ++v) A.vv_start[v + 1] += A.vv_start[v];
+  A.vv.resize(std::size_t(A.vv_start[nv]));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<HalfedgeAt> at;
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      halfedges_at(mesh, A.vf, A.vf_start[v], A.vf_start[v + 1], int(v), at);
+      int* out = A.vv.data() + A.vv_start[v];
+      for (std::size_t i = 0; i < at.size(); ++i)
+        if (i == 0 || at[i].other != at[i - 1].other) *out++ = at[i].other;
     }
-  }
-  // Neighbours come out sorted for a (keys sorted by min then max) only partly; sort each list.
-  tbb::parallel_for(size_t(0), nv, [&](size_t v) { std::sort(A.vv.begin() + A.vv_start[v], A.vv.begin() + A.vv_start[v + 1]); });
-  A.vf_start.assign(nv + 1, 0);
-  for (auto& t : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++A.vf_start[t[k] + 1];
-  for (size_t v = 0; v < nv; ++v) A.vf_start[v + 1] += A.vf_start[v];
-  A.vf.resize(3 * nf);
-  {
-    std::vector<int> fill(A.vf_start.begin(), A.vf_start.end() - 1);
-    for (size_t f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) A.vf[fill[mesh.faces[f][k]]++] = int(f);
-  }
+  });
   build_vertex_cells(mesh, A);
   return A;
 }

@@ -1,7 +1,5 @@
 #include "chokeloops/surface/surface.h"
 
-#include "halfedge_groups.h"
-#include "union_find.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -224,105 +222,6 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
 int surface_vertex_on_edge(const SurfaceMesh& mesh, Id edge) {
   auto it = std::lower_bound(mesh.vertex_edge.begin(), mesh.vertex_edge.end(), edge);
   return it != mesh.vertex_edge.end() && *it == edge ? int(it - mesh.vertex_edge.begin()) : -1;
-}
-
-int face_components(const SurfaceMesh& mesh, std::vector<int>& face_label) {
-  UnionFind uf(mesh.vertices.size());
-  for (auto& t : mesh.faces) {
-    uf.unite(t[0], t[1]);
-    uf.unite(t[0], t[2]);
-  }
-  std::vector<int> label(mesh.vertices.size(), -1);
-  face_label.assign(mesh.faces.size(), -1);
-  int n = 0;
-  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
-    int r = uf.find(mesh.faces[fi][0]);
-    if (label[r] < 0) label[r] = n++;
-    face_label[fi] = label[r];
-  }
-  return n;
-}
-
-SurfaceStats surface_stats(const SurfaceMesh& mesh) {
-  SurfaceStats s;
-  s.vertices = std::int64_t(mesh.vertices.size());
-  s.faces = std::int64_t(mesh.faces.size());
-  // Directed half-edges grouped by undirected edge.
-  const std::vector<EdgeHalfedge> he = halfedges_by_edge(mesh);
-  auto face_of = [&](std::size_t i) { return he[i].h / 3; };
-  auto origin_of = [&](std::size_t i) { return mesh.faces[std::size_t(he[i].h / 3)][he[i].h % 3]; };
-  // Fans: union the corners (face, vertex) across manifold edges.
-  UnionFind fan(mesh.faces.size() * 3);
-  auto corner_of = [&](int fi, int v) {
-    auto& t = mesh.faces[fi];
-    return fi * 3 + (t[0] == v ? 0 : t[1] == v ? 1 : 2);
-  };
-  for (size_t i = 0; i < he.size();) {
-    size_t j = i;
-    while (j < he.size() && he[j].key == he[i].key) ++j;
-    size_t n = j - i;
-    ++s.edges;
-    if (n == 1) ++s.boundary_edges;
-    else if (n > 2) ++s.nonmanifold_edges;
-    else {
-      if (origin_of(i) == origin_of(i + 1)) ++s.inconsistent_edges;
-      int a = int(he[i].key >> 32), b = int(he[i].key & 0xffffffffu);
-      fan.unite(corner_of(face_of(i), a), corner_of(face_of(i + 1), a));
-      fan.unite(corner_of(face_of(i), b), corner_of(face_of(i + 1), b));
-    }
-    i = j;
-  }
-  std::vector<int> fans_at(mesh.vertices.size(), 0);
-  for (size_t fi = 0; fi < mesh.faces.size(); ++fi)
-    for (int c = 0; c < 3; ++c)
-      if (fan.find(int(fi * 3 + c)) == int(fi * 3 + c)) ++fans_at[mesh.faces[fi][c]];
-  for (int n : fans_at) s.nonmanifold_vertices += n > 1;
-  s.euler = s.vertices - s.edges + s.faces;
-
-  std::vector<int> label;
-  s.components = face_components(mesh, label);
-  std::vector<std::int64_t> cv(s.components, 0), ce(s.components, 0), cf(s.components, 0), cbad(s.components, 0);
-  std::vector<int> vlabel(mesh.vertices.size(), -1);
-  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
-    ++cf[label[fi]];
-    for (int c = 0; c < 3; ++c) vlabel[mesh.faces[fi][c]] = label[fi];
-  }
-  for (int l : vlabel)
-    if (l >= 0) ++cv[l];
-  for (size_t i = 0; i < he.size();) {
-    size_t j = i;
-    while (j < he.size() && he[j].key == he[i].key) ++j;
-    int l = label[face_of(i)];
-    ++ce[l];
-    if (j - i != 2 || origin_of(i) == origin_of(i + 1)) ++cbad[l];
-    i = j;
-  }
-  for (size_t v = 0; v < fans_at.size(); ++v)
-    if (fans_at[v] > 1) ++cbad[vlabel[v]];
-  s.component_genus.assign(s.components, -1);
-  s.component_faces = cf;
-  s.genus = 0;
-  for (int c = 0; c < s.components; ++c) {
-    std::int64_t chi = cv[c] - ce[c] + cf[c];
-    if (cbad[c] == 0 && chi % 2 == 0 && chi <= 2) {
-      s.component_genus[c] = int((2 - chi) / 2);
-      s.genus += s.component_genus[c];
-    }
-  }
-  s.closed_manifold = s.boundary_edges == 0 && s.nonmanifold_edges == 0 && s.nonmanifold_vertices == 0 &&
-                      s.inconsistent_edges == 0;
-  double vol = 0, area = 0;
-  for (auto& t : mesh.faces) {
-    auto& a = mesh.vertices[t[0]];
-    auto& b = mesh.vertices[t[1]];
-    auto& c = mesh.vertices[t[2]];
-    vol += dot3(a, cross3(b, c)) / 6.0;
-    auto n = cross3(sub3(b, a), sub3(c, a));
-    area += 0.5 * std::sqrt(dot3(n, n));
-  }
-  s.enclosed_volume = vol;
-  s.area = area;
-  return s;
 }
 
 }  // namespace chokeloops

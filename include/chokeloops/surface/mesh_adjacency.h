@@ -66,4 +66,7 @@ int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double,
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh);
 
+// surface_stats(mesh) from an adjacency already built for `mesh` (the same numbers, without building it).
+SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
+
 }  // namespace chokeloops
