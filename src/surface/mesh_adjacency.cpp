@@ -55,14 +55,16 @@ void build_vertex_cells(const SurfaceMesh& mesh, MeshAdjacency& A) {
   for (int a = 0; a < 3; ++a) A.cell_dims[a] = long(std::floor((hi[a] - lo[a]) / cell)) + 1;
   const long ncells = A.cell_dims[0] * A.cell_dims[1] * A.cell_dims[2];
   std::vector<int> cell_of(nv);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nv, 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      std::array<long, 3> c;
+      for (int a = 0; a < 3; ++a)
+        c[a] = std::min(A.cell_dims[a] - 1, long((mesh.vertices[v][a] - lo[a]) / cell));
+      cell_of[v] = int(c[0] + A.cell_dims[0] * (c[1] + A.cell_dims[1] * c[2]));
+    }
+  });
   A.cell_start.assign(size_t(ncells) + 1, 0);
-  for (size_t v = 0; v < nv; ++v) {
-    std::array<long, 3> c;
-    for (int a = 0; a < 3; ++a)
-      c[a] = std::min(A.cell_dims[a] - 1, long((mesh.vertices[v][a] - lo[a]) / cell));
-    cell_of[v] = int(c[0] + A.cell_dims[0] * (c[1] + A.cell_dims[1] * c[2]));
-    ++A.cell_start[size_t(cell_of[v]) + 1];
-  }
+  for (size_t v = 0; v < nv; ++v) ++A.cell_start[size_t(cell_of[v]) + 1];
   for (long c = 0; c < ncells; ++c) A.cell_start[c + 1] += A.cell_start[c];
   A.cell_vertex.resize(nv);
   std::vector<int> fill(A.cell_start.begin(), A.cell_start.end() - 1);
@@ -127,13 +129,18 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
   });
   for (std::size_t v = 0; v < nv; ++v) A.vv_start[v + 1] += A.vv_start[v];
   A.vv.resize(std::size_t(A.vv_start[nv]));
+  // The neighbours are the other ends of the edges at v: sorting their ids alone is cheaper than the groups.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<HalfedgeAt> at;
+    std::vector<int> ends;
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      halfedges_at(mesh, A.vf, A.vf_start[v], A.vf_start[v + 1], int(v), at);
-      int* out = A.vv.data() + A.vv_start[v];
-      for (std::size_t i = 0; i < at.size(); ++i)
-        if (i == 0 || at[i].other != at[i - 1].other) *out++ = at[i].other;
+      ends.clear();
+      for (int i = A.vf_start[v]; i < A.vf_start[v + 1]; ++i) {
+        const auto& t = mesh.faces[std::size_t(A.vf[std::size_t(i)])];
+        for (int k = 0; k < 3; ++k)
+          if (t[k] == int(v)) ends.push_back(t[(k + 1) % 3]), ends.push_back(t[(k + 2) % 3]);
+      }
+      std::sort(ends.begin(), ends.end());
+      std::unique_copy(ends.begin(), ends.end(), A.vv.begin() + A.vv_start[v]);
     }
   });
   build_vertex_cells(mesh, A);
