@@ -48,6 +48,12 @@ CliRun run_cli(const std::string& args) {
   return r;
 }
 
+// The bytes of an input kept in fuzz/corpus (e.g. "off/regression-510dc4a98ed0"); empty if it is missing.
+std::string fuzz_input(const std::string& name) {
+  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/" + name, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 class BadInput : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -71,15 +77,15 @@ class BadInput : public ::testing::Test {
     EXPECT_NE(r.err.find(what), std::string::npos) << "expected '" << what << "' in: " << r.err;
     EXPECT_EQ(r.err.rfind("chokeloops levelset: error: ", 0), 0u) << r.err;
   }
+  // An input kept in fuzz/corpus (e.g. "off/regression-510dc4a98ed0"), written as `file` and refused with `what`.
+  void expect_kept_input_refused(const std::string& name, const std::string& file, const std::string& what) {
+    const std::string bytes = fuzz_input(name);
+    ASSERT_FALSE(bytes.empty()) << "missing kept fuzz input " << name;
+    expect_bad(write(file, bytes), what);
+  }
   fs::path dir;
   std::string out;
 };
-
-// The bytes of an input kept in fuzz/corpus (e.g. "off/regression-510dc4a98ed0"); empty if it is missing.
-std::string fuzz_input(const std::string& name) {
-  std::ifstream in(std::string(CHOKELOOPS_SOURCE_DIR) + "/fuzz/corpus/" + name, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 const char* kTetOff = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 
@@ -235,9 +241,8 @@ TEST_F(BadInput, FuzzPlyPropertyBeforeAnyElement) {
              "unknown type");
   // Found next (a timeout): a vertex element whose properties are all on its own line, so it declares none, and
   // 1777777777 items: each reads nothing, and CGAL made a point for each (regression-06085fdc3510).
-  const std::string none = fuzz_input("ply/regression-06085fdc3510");
-  ASSERT_FALSE(none.empty());
-  expect_bad(write("none.ply", none), "PLY element 'vle_?ttle_endian' announces 1 items but declares no property");
+  expect_kept_input_refused("ply/regression-06085fdc3510", "none.ply",
+                            "PLY element 'vle_?ttle_endian' announces 1 items but declares no property");
   expect_bad(write("none2.ply", "ply\nformat ascii 1.0\nelement vertex 1777777777 property float x\n"
                                 "element face 0\nproperty list uchar int vertex_indices\nend_header\n"),
              "PLY element 'vertex' announces 1777777777 items but declares no property");
@@ -282,9 +287,8 @@ TEST_F(BadInput, FuzzBinaryOffFaceLongerThanTheFile) {
   // Found by fuzzing (libFuzzer's malloc limit: 11 GB): at the end of the file CGAL's int32 read leaves the face count
   // uninitialised and goes on with it. A file ending inside its vertices or faces is refused (regression-c47e0258d445:
   // 8 faces announced, one byte left).
-  const std::string ends = fuzz_input("off/regression-c47e0258d445");
-  ASSERT_FALSE(ends.empty());
-  expect_bad(write("ends.off", ends), "truncated binary OFF file: it ends inside its faces");
+  expect_kept_input_refused("off/regression-c47e0258d445", "ends.off",
+                            "truncated binary OFF file: it ends inside its faces");
   const std::string whole = tet(3);
   expect_bad(write("cut_faces.off", whole.substr(0, whole.size() - 14)), "it ends inside its faces");
   expect_bad(write("cut_vertices.off", whole.substr(0, 60)), "it ends inside its vertices");
@@ -294,29 +298,25 @@ TEST_F(BadInput, FuzzCoffLineWithoutColourAfterOnesWithIt) {
   // Found by fuzzing (ASan, heap-buffer-overflow in CGAL's File_scanner_OFF::scan_color): CGAL's "has colours" flag
   // is set by the first vertex (or face) with a colour and never cleared, so a later line without one had its
   // colour read past its numbers. The input: a COFF vertex "0 1 1 1" (a colour index), then "0 1 00)".
-  const std::string bytes = fuzz_input("off/regression-0e7494690950");
-  ASSERT_FALSE(bytes.empty());
-  expect_bad(write("vertex.off", bytes), "vertex 1 has no colour after vertices with one");
+  expect_kept_input_refused("off/regression-0e7494690950", "vertex.off",
+                            "vertex 1 has no colour after vertices with one");
   // Found next: "0+ 0 0" is one number for CGAL (its iformat is the stream's `>>`, which stops at the '+'), so that
   // vertex's colour count went below zero; the checks read numbers the same way now (regression-3dc6bb5f9de1).
-  const std::string plus = fuzz_input("off/regression-3dc6bb5f9de1");
-  ASSERT_FALSE(plus.empty());
-  expect_bad(write("plus.off", plus), "no faces (1 vertices, 0 faces)");  // the diagnosis of the whole file
+  expect_kept_input_refused("off/regression-3dc6bb5f9de1", "plus.off",
+                            "no faces (1 vertices, 0 faces)");  // the diagnosis of the whole file
   expect_bad(write("face.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 255 0 0\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 has no colour after faces with one");
   // and a COFF file ending before its vertices or faces: CGAL read the colour of the missing line (UBSan: an offset
   // applied to the null data of its empty vector of numbers; regression-d9172e41b69b, "1 0 0" and nothing after it)
-  const std::string ends = fuzz_input("off/regression-d9172e41b69b");
-  ASSERT_FALSE(ends.empty());
-  expect_bad(write("ends.off", ends), "truncated COFF file: it ends before vertex 0 of 1");
+  expect_kept_input_refused("off/regression-d9172e41b69b", "ends.off",
+                            "truncated COFF file: it ends before vertex 0 of 1");
   expect_bad(write("ends2.off", "COFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1 5\n3 0 1 3 5\n"),
              "truncated COFF file: it ends before face 2 of 4");
   // and an ST4OFF file: CGAL's scanner reads texture coordinates at an index it sets only for coloured files
   // (UBSan, regression-3573396b1447). Homogeneous files with attributes are refused; other files with normals,
   // colours or texture coordinates reach CGAL as the plain OFF of their coordinates and faces.
-  const std::string st4 = fuzz_input("off/regression-3573396b1447");
-  ASSERT_FALSE(st4.empty());
-  expect_bad(write("st4.off", st4), "ST4OFF (homogeneous coordinates with normals, colours or texture coordinates)");
+  expect_kept_input_refused("off/regression-3573396b1447", "st4.off",
+                            "ST4OFF (homogeneous coordinates with normals, colours or texture coordinates)");
   const TriangleMesh plain = read_mesh(write("plain.off", kTetOff));
   for (const char* variant :
        {"STOFF\n4 4 0\n0 0 0 .5 .5\n1 0 0 0 1\n0 1 0 1 0\n0 0 1 1 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
@@ -366,9 +366,7 @@ TEST_F(BadInput, FuzzNoFaceLeftAfterRemovingDegenerateOnes) {
   // Found by fuzzing (UBSan, optimised build): faces with distinct indices whose points are collinear are all
   // removed as degenerate; CGAL's outward orientation then read the orientation of a component that does not
   // exist. Refused instead: nothing is left to convert.
-  const std::string obj = fuzz_input("obj/regression-478ce6d8f6fa");
-  ASSERT_FALSE(obj.empty());
-  expect_bad(write("degenerate.obj", obj), "every face is degenerate");
+  expect_kept_input_refused("obj/regression-478ce6d8f6fa", "degenerate.obj", "every face is degenerate");
   expect_bad(write("collinear.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 3 4\n"),
              "every face is degenerate");
 }
@@ -488,9 +486,8 @@ TEST_F(BadInput, FuzzVdbChildCountBeyondTheFile) {
 TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
   // Found by fuzzing (UBSan): OpenVDB's header code reads a root tile's active flag straight into a bool, and a
   // byte other than 0 or 1 there is undefined behaviour. The guard checks the float grid's root tiles first.
-  const std::string bytes = fuzz_input("vdb/regression-f1b5600801d0");
-  ASSERT_FALSE(bytes.empty());
-  expect_bad(write("tile.vdb", bytes), "corrupt metadata");  // its buffer count, checked before the tiles
+  expect_kept_input_refused("vdb/regression-f1b5600801d0", "tile.vdb",
+                            "corrupt metadata");  // its buffer count, checked before the tiles
 }
 
 TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {
@@ -590,9 +587,7 @@ TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
   // (regression-f4ad5f56b297: its second line says binary, which CGAL follows, and a later format line said ascii,
   // which this check followed). The format is taken from the second line only, and the body is walked as CGAL reads
   // it, every list checked against what the file has left.
-  const std::string found = fuzz_input("ply/regression-f4ad5f56b297");
-  ASSERT_FALSE(found.empty());
-  expect_bad(write("found.ply", found), "format line other than its second line");
+  expect_kept_input_refused("ply/regression-f4ad5f56b297", "found.ply", "format line other than its second line");
 
   const std::string head =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
@@ -619,9 +614,7 @@ TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
                                             tri + "3 0 1 2\n")).faces.size(), 1u);
   // Found next (libFuzzer's 2 GB RSS limit): an ASCII list count of 42 digits; the extraction fails but leaves
   // INT_MAX, and CGAL sizes the list by it before it looks at the stream (regression-40444d22dd05).
-  const std::string digits = fuzz_input("ply/regression-40444d22dd05");
-  ASSERT_FALSE(digits.empty());
-  expect_bad(write("digits.ply", digits), "PLY list of 2147483647 items in element 0");
+  expect_kept_input_refused("ply/regression-40444d22dd05", "digits.ply", "PLY list of 2147483647 items in element 0");
   expect_bad(write("digits2.ply", head + "element face 1\nproperty list int int vertex_indices\nend_header\n" + tri +
                                       "99999999999999999999 0 1 2\n"),
              "PLY list of 2147483647 items");
@@ -631,46 +624,36 @@ TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   // Found by fuzzing (UBSan in CGAL's OFF header): a keyword ending in a byte that is not a letter, a comment, and
   // BINARY on the next line (regression-510dc4a98ed0). CGAL reads that as a binary header and took text for
   // counts of 3.4e9; the header is now scanned the way CGAL scans it, and the counts checked against the file.
-  const std::string found = fuzz_input("off/regression-510dc4a98ed0");
-  ASSERT_FALSE(found.empty());
-  expect_bad(write("found.off", found), "binary OFF header announces");
+  expect_kept_input_refused("off/regression-510dc4a98ed0", "found.off", "binary OFF header announces");
   expect_bad(write("comment.off", "# a comment\nOFF # another\n# and one more\n3000000000 1 0\n0 0 0\n"),
              "more than a file of");
   EXPECT_EQ(read_mesh(write("good.off", std::string("# c\n") + kTetOff)).faces.size(), 4u);
 
   // Found next: CGAL reads a face line's numbers as double and converts them to std::size_t (UBSan: a face of -20
   // vertices, regression-c6578a24fa42). Negative, huge or non-finite vertex counts and indices are refused first.
-  const std::string found2 = fuzz_input("off/regression-c6578a24fa42");
-  ASSERT_FALSE(found2.empty());
-  expect_bad(write("face.off", found2), "face 1 has -20 vertices");
+  expect_kept_input_refused("off/regression-c6578a24fa42", "face.off", "face 1 has -20 vertices");
   expect_bad(write("index.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 -3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 references vertex -3");
   expect_bad(write("nan.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1 # c\n# c\n3 0 2 1\n3 0 1 3\n1e30 0 3 2\n3 1 2 3\n"),
              "face 2 has 1e+30 vertices");
   // and a vertex line without its numbers (UBSan in CGAL's texture coordinates: regression-09a7fc5d721a, STOFF)
-  const std::string found3 = fuzz_input("off/regression-09a7fc5d721a");
-  ASSERT_FALSE(found3.empty());
-  expect_bad(write("stoff.off", found3), "truncated OFF file");  // what the diagnosis of the whole file says
+  expect_kept_input_refused("off/regression-09a7fc5d721a", "stoff.off",
+                            "truncated OFF file");  // what the diagnosis of the whole file says
   expect_bad(write("short.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "vertex 1 has 2 numbers");
   // and an edge count CGAL doubles into an int (regression-24130c2839b8: nOFF, binary)
-  const std::string found4 = fuzz_input("off/regression-24130c2839b8");
-  ASSERT_FALSE(found4.empty());
-  expect_bad(write("edges.off", found4), "edges (malformed)");
+  expect_kept_input_refused("off/regression-24130c2839b8", "edges.off", "edges (malformed)");
   expect_bad(write("edges2.off", "OFF\n4 4 2000000000\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "OFF header announces 2000000000 edges");
   // and a face whose count CGAL allocates before finding its indices missing (4.4 GB: regression-20686756b7fb)
-  const std::string found5 = fuzz_input("off/regression-20686756b7fb");
-  ASSERT_FALSE(found5.empty());
-  expect_bad(write("count.off", found5), "indices");
+  expect_kept_input_refused("off/regression-20686756b7fb", "count.off", "indices");
   expect_bad(write("count2.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n555555555 0 1 3\n3 0 3 2\n3 1 2 3\n"),
              "face 1 has 555555555 vertices but its line holds 3 indices");
   // and a COFF vertex "0+ 1 0", one number for CGAL, whose colour CGAL then read past (ASan: regression-53d38fc2d606;
   // first taken for a face line without numbers, fixed by reading numbers as CGAL does:
   // FuzzCoffLineWithoutColourAfterOnesWithIt), and COFF colours of 2 numbers
-  const std::string found6 = fuzz_input("off/regression-53d38fc2d606");
-  ASSERT_FALSE(found6.empty());
-  expect_bad(write("colour.off", found6), "vertex 0 has 1 numbers, fewer than the 3 a COFF vertex needs");
+  expect_kept_input_refused("off/regression-53d38fc2d606", "colour.off",
+                            "vertex 0 has 1 numbers, fewer than the 3 a COFF vertex needs");
   expect_bad(write("colour1.off", "COFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\nx y\n"), "face 0 has no numbers");
   expect_bad(write("colour2.off", "COFF\n3 1 0\n0 0 0 1 2\n1 0 0\n0 1 0\n3 0 1 2\n"), "colour numbers");
   EXPECT_EQ(read_mesh(write("coff.off", "COFF\n4 4 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n0 0 1 9 9 9 1\n"

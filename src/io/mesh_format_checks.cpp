@@ -175,14 +175,20 @@ std::string check_off_header(const std::string& path, std::uintmax_t size) {
       s << q(path) << ": truncated " << keyword << " file: it ends before " << what << " " << k << " of " << n;
       return Error(s.str());
     };
-    for (std::uintmax_t v = 0; v < counts[0]; ++v) {
+    // The numbers of the next body line (vertex or face k of n); false where CGAL's own reading fails at the end.
+    auto body_line = [&](const char* what, std::uintmax_t k, std::uintmax_t n, std::vector<double>& numbers) {
       if (!next_line(line)) {
-        if (plain) throw truncated("vertex", v, counts[0]);
-        return {};
+        if (plain) throw truncated(what, k, n);
+        return false;
       }
       std::istringstream ls(line);
-      std::vector<double> numbers_read;
-      for (double d; cgal_ascii_double(ls, &d);) numbers_read.push_back(d);
+      numbers.clear();
+      for (double d; cgal_ascii_double(ls, &d);) numbers.push_back(d);
+      return true;
+    };
+    std::vector<double> numbers_read, entries;
+    for (std::uintmax_t v = 0; v < counts[0]; ++v) {
+      if (!body_line("vertex", v, counts[0], numbers_read)) return {};
       const std::size_t numbers = numbers_read.size();
       if (colours && numbers >= needed) check_colour(numbers_read, needed, "vertex", v, vertex_colours);
       if (numbers < needed) {
@@ -195,13 +201,7 @@ std::string check_off_header(const std::string& path, std::uintmax_t size) {
       if (plain) out << numbers_read[0] << ' ' << numbers_read[1] << ' ' << numbers_read[2] << '\n';
     }
     for (std::uintmax_t f = 0; f < counts[1]; ++f) {
-      if (!next_line(line)) {
-        if (plain) throw truncated("face", f, counts[1]);
-        return {};
-      }
-      std::istringstream ls(line);
-      std::vector<double> entries;
-      for (double d; cgal_ascii_double(ls, &d);) entries.push_back(d);
+      if (!body_line("face", f, counts[1], entries)) return {};
       if (entries.empty() && plain) throw Error(q(path) + ": face " + std::to_string(f) + " has no numbers");
       if (entries.empty()) return {};
       auto bad = [&](double d) { return !(d >= 0 && d < 9e18); };
