@@ -620,6 +620,27 @@ TEST_F(BadInput, FuzzPlyListLongerThanTheFile) {
              "PLY list of 2147483647 items");
 }
 
+TEST_F(BadInput, FuzzPlyBodyFailingBeforeAListIsRefused) {
+  // Found by fuzzing, only now and then (libFuzzer's malloc limit: 8 GB): once a read of an ASCII PLY body fails,
+  // CGAL reads the rest of the element from the failed stream, which leaves each value as it was, so a list count
+  // was whatever its uninitialised variable held (regression-71597e842c05: the file ends inside its vertices, whose
+  // element has a list). Where a list is still to come, a body that fails is refused.
+  expect_kept_input_refused("ply/regression-71597e842c05", "found.ply",
+                            "ASCII PLY body ends or holds something other than a number in element 0, item 6");
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  expect_bad(write("ends.ply", head + "0 0 0\n1 0 0\n0 1\n"), "in element 0, item 2, before a list's count");
+  expect_bad(write("word.ply", head + "0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n"), "in element 0, item 1, before a list's count");
+  std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 2\nproperty list int int vertex_indices\nend_header\n";
+  bin.append(36, '\0');
+  bin += std::string("\x07\0\0\0", 4);  // a first face of 7 indices: the file is as long as two triangles need,
+  bin.append(28, '\0');                   // and ends where the second face's count should be
+  expect_bad(write("bin_ends.ply", bin), "binary PLY body ends or holds something other than a number in element 1, item 1");
+  // the whole file still reads, and an ASCII file without lists ahead is left to CGAL's own message
+  EXPECT_EQ(read_mesh(write("good.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")).faces.size(), 1u);
+}
+
 TEST_F(BadInput, FuzzOffBinaryKeywordAfterComments) {
   // Found by fuzzing (UBSan in CGAL's OFF header): a keyword ending in a byte that is not a letter, a comment, and
   // BINARY on the next line (regression-510dc4a98ed0). CGAL reads that as a binary header and took text for

@@ -433,6 +433,22 @@ void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t
       << " is longer than the rest of the file (truncated or malformed)";
     throw Error(s.str());
   };
+  // Once a read fails (the file ends, or a token is not a number), CGAL goes on reading the element's other
+  // properties from the failed stream, which leaves each value untouched: a list count then is whatever the
+  // uninitialised variable held (found by fuzzing: a 2e9-item list from an ASCII file ending inside its vertices,
+  // only now and then). So where a list is still to come, a body that fails is refused here.
+  std::vector<bool> list_ahead(h.elements.size() + 1, false);
+  for (std::size_t e = h.elements.size(); e-- > 0;) {
+    list_ahead[e] = list_ahead[e + 1];
+    for (const auto& p : h.elements[e].properties) list_ahead[e] = list_ahead[e] || !p.count_type.empty();
+  }
+  auto stop = [&](std::size_t e, std::size_t i) {
+    if (!list_ahead[e]) return;  // CGAL finds the failure itself, before any list
+    std::ostringstream s;
+    s << q(path) << ": " << (ascii ? "ASCII" : "binary") << " PLY body ends or holds something other than a number in "
+      << "element " << e << ", item " << i << ", before a list's count (truncated or malformed)";
+    throw Error(s.str());
+  };
   for (std::size_t e = 0; e < h.elements.size(); ++e) {
     const PlyHeader::Element& el = h.elements[e];
     if (el.properties.empty()) continue;
@@ -443,7 +459,7 @@ void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t
       fixed += ply_type_size(p.type);
     }
     if (!ascii && !lists) {  // binary, fixed size: skip the whole element
-      if (std::uintmax_t(fixed) * el.count > left()) return;
+      if (std::uintmax_t(fixed) * el.count > left()) return stop(e, std::size_t(left() / std::max<std::size_t>(fixed, 1)));
       pos += std::uintmax_t(fixed) * el.count;
       in.seekg(std::streamoff(pos));
       continue;
@@ -456,21 +472,21 @@ void check_ply_lists(const std::string& path, const PlyHeader& h, std::uintmax_t
           const bool read = ply_ascii_number(in, p.count_type.empty() ? p.type : p.count_type, &n);
           // an item and a separator each; short lists need no check (and a tellg each)
           if (!p.count_type.empty() && n > 1024 && std::uintmax_t(n) > left() / 2 + 1) refuse(n, e);
-          if (!read) return;
+          if (!read) return stop(e, i);
           if (p.count_type.empty()) continue;
           if (n < 0) return;
           for (long long k = 0; k < n; ++k)
-            if (!ply_ascii_number(in, p.type, nullptr)) return;
+            if (!ply_ascii_number(in, p.type, nullptr)) return stop(e, i);
           continue;
         }
         if (p.count_type.empty()) {
-          if (item > left()) return;
+          if (item > left()) return stop(e, i);
           skip(item);
           continue;
         }
         const std::size_t cs = ply_type_size(p.count_type);
         unsigned char b[4] = {0, 0, 0, 0};
-        if (cs > left() || !in.read(reinterpret_cast<char*>(b), std::streamsize(cs))) return;
+        if (cs > left() || !in.read(reinterpret_cast<char*>(b), std::streamsize(cs))) return stop(e, i);
         pos += cs;
         std::uint32_t u = 0;
         for (std::size_t k = 0; k < cs; ++k) u |= std::uint32_t(b[big ? cs - 1 - k : k]) << (8 * k);
