@@ -488,6 +488,9 @@ TEST_F(BadInput, FuzzVdbRootTileFlagNeitherZeroNorOne) {
   // byte other than 0 or 1 there is undefined behaviour. The guard checks the float grid's root tiles first.
   expect_kept_input_refused("vdb/regression-f1b5600801d0", "tile.vdb",
                             "corrupt metadata");  // its buffer count, checked before the tiles
+  // Found next: a grid whose block position lies before its own transform; the guard took the grid being read to be
+  // one whose blocks start after the transform, found none and left the tiles unchecked (a flag of 40).
+  expect_kept_input_refused("vdb/regression-92cd005d697d", "block.vdb", "a root tile's active flag is 40");
 }
 
 TEST_F(BadInput, FuzzVdbReadStoppingInsideARootChildFreesIt) {

@@ -344,22 +344,25 @@ void check_names(std::istream& is, int count) {
 // tiles (coordinates, value, flag), which are checked here first.
 struct GridPlace {
   const std::istream* stream;
-  std::int64_t grid_pos, block_pos;
+  std::int64_t grid_pos;
   bool float_grid;
 };
 thread_local std::vector<GridPlace>* t_places = nullptr;
 
 void note_grid(const std::istream& is, const openvdb::io::GridDescriptor& d) {
-  if (t_places) t_places->push_back({&is, d.getGridPos(), d.getBlockPos(), d.gridType() == "Tree_float_5_4_3" && !d.isInstance()});
+  if (t_places) t_places->push_back({&is, d.getGridPos(), d.gridType() == "Tree_float_5_4_3" && !d.isInstance()});
 }
 
 void check_float_root(std::istream& is, std::streampos transform_at) {
   if (!t_places || openvdb::io::getFormatVersion(is) < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) return;
+  // The grid being read is the one that starts last before its transform. Not "and whose blocks start after it":
+  // a corrupt block position put the transform past it, and the float grid's tiles went unchecked (found by
+  // fuzzing: a flag of 40).
   const std::int64_t at = std::int64_t(transform_at);
-  bool float_grid = false;
+  const GridPlace* reading = nullptr;
   for (const GridPlace& p : *t_places)
-    if (p.stream == &is && p.grid_pos <= at && at < p.block_pos) float_grid = p.float_grid;
-  if (!float_grid) return;
+    if (p.stream == &is && p.grid_pos <= at && (!reading || p.grid_pos > reading->grid_pos)) reading = &p;
+  if (!reading || !reading->float_grid) return;
   const std::streampos start = is.tellg();
   const std::uint32_t buffers = read_u32(is);
   if (buffers != 1) refuse_meta("the tree claims " + std::to_string(buffers) + " buffers, not 1");
