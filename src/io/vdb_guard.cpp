@@ -357,11 +357,16 @@ void check_float_root(std::istream& is, std::streampos transform_at) {
   if (!t_places || openvdb::io::getFormatVersion(is) < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) return;
   // The grid being read is the one that starts last before its transform. Not "and whose blocks start after it":
   // a corrupt block position put the transform past it, and the float grid's tiles went unchecked (found by
-  // fuzzing: a flag of 40).
+  // fuzzing: a flag of 40). When no grid claims to start before it (a corrupt grid position, found next: a flag
+  // of 135), the last grid described on this stream is the one read.
   const std::int64_t at = std::int64_t(transform_at);
-  const GridPlace* reading = nullptr;
-  for (const GridPlace& p : *t_places)
-    if (p.stream == &is && p.grid_pos <= at && (!reading || p.grid_pos > reading->grid_pos)) reading = &p;
+  const GridPlace *reading = nullptr, *last = nullptr;
+  for (const GridPlace& p : *t_places) {
+    if (p.stream != &is) continue;
+    last = &p;
+    if (p.grid_pos <= at && (!reading || p.grid_pos > reading->grid_pos)) reading = &p;
+  }
+  if (!reading) reading = last;
   if (!reading || !reading->float_grid) return;
   const std::streampos start = is.tellg();
   const std::uint32_t buffers = read_u32(is);
