@@ -1,6 +1,6 @@
 #pragma once
-// The edges of a triangle mesh seen from each vertex: the faces around every vertex (CSR), and at a vertex
-// the half-edges of its faces that touch it, grouped by the edge's other end. The adjacency and the surface
+// The edges of a triangle mesh seen from each vertex: at a vertex, the half-edges of its faces (the
+// adjacency's vf lists) that touch it, grouped by the edge's other end. The adjacency and the surface
 // statistics read every edge from its smaller end, in parallel over vertices: each vertex reads only its own
 // few faces, where a global sort of all half-edges by edge scattered hundreds of MB (17.7M faces of a
 // molecular surface: 2 x 2-4 s).
@@ -9,9 +9,6 @@
 #include "chokeloops/surface/surface.h"
 
 namespace chokeloops {
-
-// Faces around each vertex, in rising face order; a face is listed once per corner it has there.
-void vertex_faces(const SurfaceMesh& mesh, std::vector<int>& start, std::vector<int>& faces);
 
 struct HalfedgeAt {
   int other;  // the edge's other end

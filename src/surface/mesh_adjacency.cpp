@@ -70,8 +70,8 @@ void build_vertex_cells(const SurfaceMesh& mesh, MeshAdjacency& A) {
   std::vector<int> fill(A.cell_start.begin(), A.cell_start.end() - 1);
   for (size_t v = 0; v < nv; ++v) A.cell_vertex[fill[cell_of[v]]++] = int(v);
 }
-}  // namespace
 
+// Faces around each vertex, in rising face order; a face is listed once per corner it has there.
 void vertex_faces(const SurfaceMesh& mesh, std::vector<int>& start, std::vector<int>& faces) {
   const std::size_t nv = mesh.vertices.size(), nf = mesh.faces.size();
   start.assign(nv + 1, 0);
@@ -83,6 +83,7 @@ void vertex_faces(const SurfaceMesh& mesh, std::vector<int>& start, std::vector<
   for (std::size_t f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) faces[std::size_t(fill[std::size_t(mesh.faces[f][k])]++)] = int(f);
 }
+}  // namespace
 
 void halfedges_at(const SurfaceMesh& mesh, const std::vector<int>& vf, int begin, int end, int v,
                   std::vector<HalfedgeAt>& out) {
