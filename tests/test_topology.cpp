@@ -97,6 +97,47 @@ TEST(Topology, RejectsBrokenLoops) {
   EXPECT_THROW(topo.separates({0, 1, 2, 3, 4, 5, 6, 7, 8, 9}), Error);  // not consecutive along edges
 }
 
+TEST(Topology, SeparationOfLoopsThatAreNotSimpleOrPassAPinch) {
+  // Simple loops through discs are decided by their Z/2 class; these two kinds are not, and must still get
+  // the answer of removing their edges.
+  auto m = cube_surface(64, analytic::torus(0.3, 0.12));
+  SurfaceTopology topo(m);
+  auto mer = snap_polyline_to_edge_path(m, circle({0.5 + 0.3, 0.5, 0.5}, {1, 0, 0}, {0, 0, 1}, 0.12));
+  std::vector<int> twice(mer);
+  twice.insert(twice.end(), mer.begin(), mer.end());
+  ASSERT_FALSE(loop_is_simple(twice));
+  EXPECT_TRUE(topo.null_homologous(twice));  // twice is zero mod 2...
+  EXPECT_FALSE(topo.separates(twice));       // ...yet the torus stays connected without the meridian's edges
+  EXPECT_FALSE(topo.separates(mer));
+
+  // A tube of 4 rings of 8 whose two ends close on one vertex (a sphere with two points made one): every
+  // edge has two faces, but vertex 0 has two discs of faces around it.
+  const int n = 8, rings = 4;
+  SurfaceMesh pinched;
+  pinched.vertices.push_back({0, 0, -1});
+  for (int r = 0; r < rings; ++r)
+    for (int i = 0; i < n; ++i)
+      pinched.vertices.push_back({std::cos(2 * M_PI * i / n), std::sin(2 * M_PI * i / n), double(r)});
+  auto at = [&](int r, int i) { return 1 + r * n + (i % n); };
+  for (int r = 0; r + 1 < rings; ++r)
+    for (int i = 0; i < n; ++i) {
+      pinched.faces.push_back({at(r, i), at(r, i + 1), at(r + 1, i + 1)});
+      pinched.faces.push_back({at(r, i), at(r + 1, i + 1), at(r + 1, i)});
+    }
+  for (int i = 0; i < n; ++i) {
+    pinched.faces.push_back({0, at(0, i + 1), at(0, i)});
+    pinched.faces.push_back({0, at(rings - 1, i), at(rings - 1, i + 1)});
+  }
+  SurfaceTopology tp(pinched);
+  std::vector<int> along{0};  // from the pinch along the tube and back into it: the tube cut open stays one piece
+  for (int r = 0; r < rings; ++r) along.push_back(at(r, 0));
+  ASSERT_TRUE(loop_is_simple(along));
+  EXPECT_FALSE(tp.separates(along));
+  std::vector<int> ring;  // around the tube: its two halves meet only at the pinch vertex, not along an edge
+  for (int i = 0; i < n; ++i) ring.push_back(at(1, i));
+  EXPECT_TRUE(tp.separates(ring));
+}
+
 TEST(Topology, FastContractibilityAgreesWithCgal) {
   // Two tori (genus 2) joined by a bar along x: a circle around the bar separates the surface into two
   // genus-1 halves, so it is essential although it separates: the case a separation test alone gets wrong.
