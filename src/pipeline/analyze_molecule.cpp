@@ -6,6 +6,8 @@
 // atoms: they keep their bottleneck or depth and a note, and are not traced.
 #include "chokeloops/analyze_molecule.h"
 
+#include <tbb/task_group.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -47,9 +49,15 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.timings_ms["chokes"] = ms(t);
   stage("surface", 0);
   MeshAdjacency surface_adjacency = extract_checked_surface(r);
-
+  // The surface's homology basis (a serial pass over all its faces: 1.5 s on maltoporin's 17.7M) is built
+  // beside the channels, which run in parallel, rather than in the loop stage with every thread waiting on it.
+  // Timed with the channels.
   t = Clock::now();
   stage("channels", 0);
+  LoopContext context = prepare_loops(r, std::move(surface_adjacency));
+  tbb::task_group basis;
+  if (context.topology) basis.run([&] { context.topology->prepare_homology(); });
+
   std::vector<std::array<double, 3>> centres;
   std::vector<double> vdw_radii;
   for (auto& a : m.molecule.atoms) centres.push_back(a.pos), vdw_radii.push_back(a.radius);
@@ -58,11 +66,11 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   AtomLocator surf(centres, surface_radii(m.molecule, fo.surface == MolecularSurface::Sas ? MolecularSurface::Sas
                                                                                            : MolecularSurface::Vdw, fo.probe));
   m.channels = analyze_channels(r.grid, r.surface, surf, vdw, r.chokes.chokes, options.channels);
+  basis.wait();
   r.timings_ms["channels"] = ms(t);
 
   t = Clock::now();
   stage("loops", 0);
-  LoopContext context = prepare_loops(r, std::move(surface_adjacency));
   const MeshAdjacency& adjacency = context.adjacency;
   SurfaceTopology* topology = context.topology.get();
   r.loops.assign(r.chokes.chokes.size(), Loop{});

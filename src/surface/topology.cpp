@@ -221,6 +221,8 @@ bool SurfaceTopology::contractible_fast(const std::vector<int>& loop) {
   return chi == 1 || impl_->euler[c] - chi == 1;
 }
 
+void SurfaceTopology::prepare_homology() { impl_->homology(); }
+
 bool SurfaceTopology::null_homologous(const std::vector<int>& loop) {
   impl_->check(loop);
   const int c = impl_->vertex_label[loop[0]];

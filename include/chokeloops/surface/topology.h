@@ -40,6 +40,9 @@ class SurfaceTopology {
   // non-contractible. On a component with boundary it answers contractible() instead (a sufficient
   // condition only).
   bool null_homologous(const std::vector<int>& loop);
+  // Builds the tree-cotree basis that null_homologous() (and so contractible_fast() and separates()) use,
+  // now rather than at the first query: a caller can overlap it with other work. Thread-safe, done once.
+  void prepare_homology();
   // How many contractibility queries CGAL answered so far (the others were decided by face floods).
   int cgal_queries() const;
   // Removing the loop's edges splits the loop's component into more face-connected parts.
