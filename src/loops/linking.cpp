@@ -231,6 +231,22 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
     path.assign(to0.rbegin(), to0.rend());
     path.insert(path.end(), to1.begin(), to1.end());
   };
+  // Marks x's unmarked neighbours beyond the level as reached by `side` (each then handed to `reached`), and
+  // meets the other side at the first neighbour it holds.
+  auto expand = [&](int side, Id x, const std::array<int, 3>& xc, auto&& reached) {
+    for (int nb = 0; nb < 14 && path.empty(); ++nb) {
+      if (!cx.neighbor_inside(xc, nb)) continue;
+      const Id u = x + cx.neighbor_delta(nb);
+      if (mark[u] == 0) {
+        if (!beyond(u)) continue;
+        mark[u] = std::uint8_t(kSeen | side * 16 | (1 + nb));
+        touched.push_back(u);
+        reached(u);
+      } else if (side_of(u) != side) {
+        meet(side, x, u);
+      }
+    }
+  };
   // A tunnel's two sides usually meet only past the grid, through the outside node: a breadth-first search
   // grew each into a ball reaching the border, then the outside node into the whole border (most of a
   // molecule's box, ~0.1 s a tunnel on maltoporin). Each side instead heads for the nearest border first
@@ -265,19 +281,7 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
           break;
         }
       }
-      for (int nb = 0; nb < 14 && path.empty(); ++nb) {
-        if (!cx.neighbor_inside(xc, nb)) continue;
-        const Id u = x + cx.neighbor_delta(nb);
-        const std::uint8_t m = mark[u];
-        if (m == 0) {
-          if (!beyond(u)) continue;
-          mark[u] = std::uint8_t(kSeen | side * 16 | (1 + nb));
-          touched.push_back(u);
-          open[side].push({to_border(u), u});
-        } else if (side_of(u) != side) {
-          meet(side, x, u);
-        }
-      }
+      expand(side, x, xc, [&](Id u) { open[side].push({to_border(u), u}); });
     }
   }
   while (handle && path.empty() && !frontier[0].empty() && !frontier[1].empty()) {
@@ -313,19 +317,7 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
           break;
         }
       }
-      for (int nb = 0; nb < 14 && path.empty(); ++nb) {
-        if (!cx.neighbor_inside(xc, nb)) continue;
-        const Id u = x + cx.neighbor_delta(nb);
-        const std::uint8_t m = mark[u];
-        if (m == 0) {
-          if (!beyond(u)) continue;
-          mark[u] = std::uint8_t(kSeen | side * 16 | (1 + nb));
-          touched.push_back(u);
-          next.push_back(u);
-        } else if (side_of(u) != side) {
-          meet(side, x, u);
-        }
-      }
+      expand(side, x, xc, [&](Id u) { next.push_back(u); });
       if (!path.empty()) break;
     }
     frontier[side].swap(next);
