@@ -251,8 +251,8 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
   // grew each into a ball reaching the border, then the outside node into the whole border (most of a
   // molecule's box, ~0.1 s a tunnel on maltoporin). Each side instead heads for the nearest border first
   // (best first, by distance to the border, ties by id: the same path on any thread count), and a side that
-  // has reached it waits while the other still can move; neither is stopped, so any meeting there is is
-  // still found. The cycle is any in the generator's class, as before.
+  // has reached it waits while the other still can move; neither is stopped, so a meeting inside the grid is
+  // still found where there is one. The cycle is any in the generator's class, as before.
   if (!handle) {
     auto to_border = [&](Id v) {
       const auto p = cx.coords(v);
