@@ -85,7 +85,8 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
 
   t = Clock::now();
   stage("loops", 0);
-  LoopContext context = prepare_loops(r, std::move(adjacency));
+  LoopContext context;
+  prepare_loops(r, std::move(adjacency), context);
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
                         r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
   r.timings_ms["loops"] = ms_since(t);
@@ -219,14 +220,12 @@ MeshAdjacency extract_checked_surface(AnalyzeResult& r) {
   return adjacency;
 }
 
-LoopContext prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency) {
-  LoopContext context;
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, LoopContext& context) {
   context.adjacency = std::move(adjacency);
   bool any_generator = false;
   for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
   // One topology of the surface serves the choice of every generator's curve and the check after.
   if (any_generator) context.topology = std::make_unique<SurfaceTopology>(r.surface, context.adjacency);
-  return context;
 }
 
 void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& topology, const std::vector<bool>* skip) {

@@ -20,12 +20,16 @@ namespace chokeloops {
 MeshAdjacency extract_checked_surface(AnalyzeResult& r);
 
 // What the loop stage shares between all chokes: the surface's adjacency, and its topology when some choke
-// is a generator (the choice of a generator's curve and the check below need it).
+// is a generator (the choice of a generator's curve and the check below need it). The topology refers to the
+// adjacency beside it, so a context stays where it was made: it is filled in place and never moved.
 struct LoopContext {
+  LoopContext() = default;
+  LoopContext(const LoopContext&) = delete;
+  LoopContext& operator=(const LoopContext&) = delete;
   MeshAdjacency adjacency;
   std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
 };
-LoopContext prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency);
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, LoopContext& context);
 
 // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks that
 // it did; a generator loop that became contractible is reported as missing. Loops with `skip[i]` set (when
