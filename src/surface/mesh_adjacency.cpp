@@ -20,6 +20,23 @@ int MeshAdjacency::halfedge(const SurfaceMesh& m, int a, int b) const {
   return -1;
 }
 
+bool turns_once_around(const SurfaceMesh& mesh, const MeshAdjacency& A, int v) {
+  const int b0 = A.vf_start[std::size_t(v)], b1 = A.vf_start[std::size_t(v) + 1];
+  if (b0 == b1) return false;
+  int start = -1;
+  const int f = A.vf[std::size_t(b0)];
+  for (int k = 0; k < 3; ++k)
+    if (mesh.faces[std::size_t(f)][k] == v) start = 3 * f + k;
+  int h = start, turns = 0;
+  do {
+    const int t = A.twin[std::size_t(MeshAdjacency::prev(h))];
+    if (t < 0 || mesh.faces[std::size_t(t / 3)][t % 3] != v) return false;  // boundary, or orientations disagree
+    h = t;
+    ++turns;
+  } while (h != start && turns <= b1 - b0);
+  return h == start && turns == b1 - b0;
+}
+
 bool MeshAdjacency::has_edge(int a, int b) const {
   return std::binary_search(vv.begin() + vv_start[a], vv.begin() + vv_start[a + 1], b);
 }

@@ -54,20 +54,7 @@ AtVertex count_at_vertex(const SurfaceMesh& mesh, const MeshAdjacency& A, int v,
   if (b0 == b1) return out;
   const auto vv0 = A.vv.begin() + A.vv_start[std::size_t(v)], vv1 = A.vv.begin() + A.vv_start[std::size_t(v) + 1];
   out.edges = int(vv1 - std::lower_bound(vv0, vv1, v));
-  {  // The usual vertex: turning around it from face to face through twins visits all its faces once.
-    int start = -1;
-    const int f = A.vf[std::size_t(b0)];
-    for (int k = 0; k < 3; ++k)
-      if (mesh.faces[std::size_t(f)][k] == v) start = 3 * f + k;
-    int h = start, turns = 0;
-    do {
-      const int t = A.twin[std::size_t(MeshAdjacency::prev(h))];
-      if (t < 0 || mesh.faces[std::size_t(t / 3)][t % 3] != v) break;  // boundary, or orientations disagree
-      h = t;
-      ++turns;
-    } while (h != start && turns <= b1 - b0);
-    if (h == start && turns == b1 - b0) return out;
-  }
+  if (turns_once_around(mesh, A, v)) return out;  // the usual vertex: one disc of faces, nothing more to count
   const auto f0 = A.vf.begin() + b0, f1 = A.vf.begin() + b1;
   auto slot = [&](int f) { return int(std::lower_bound(f0, f1, f) - f0); };  // faces around v rise
   fan.resize(std::size_t(b1 - b0));

@@ -26,28 +26,6 @@ using SM = CGAL::Surface_mesh<K::Point_3>;
 using CST = CGAL::Surface_mesh_topology::Curves_on_surface_topology<SM>;
 using Path = CGAL::Surface_mesh_topology::Path_on_surface<SM>;
 
-// Whether v's faces close into one disc around it through their twins (no pinch, no border at v): walks
-// from face to face across the edges at v, whichever way each face is oriented.
-bool one_disc_around(const SurfaceMesh& m, const MeshAdjacency& adj, int v) {
-  const int count = adj.vf_start[std::size_t(v) + 1] - adj.vf_start[std::size_t(v)];
-  if (count < 3) return false;
-  const int first = adj.vf[std::size_t(adj.vf_start[std::size_t(v)])];
-  int f = first, came_from = -1, steps = 0;
-  do {
-    const auto& t = m.faces[std::size_t(f)];
-    const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-    const int out = 3 * f + k, in = MeshAdjacency::prev(out);  // v -> t[k+1], t[k-1] -> v
-    const int to = t[(k + 1) % 3];
-    const int h = to != came_from ? out : in;
-    came_from = h == out ? to : t[(k + 2) % 3];
-    const int twin = adj.twin[std::size_t(h)];
-    if (twin < 0) return false;
-    f = MeshAdjacency::face(twin);
-    if (++steps > count) return false;
-  } while (f != first);
-  return steps == count;
-}
-
 double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
@@ -235,12 +213,12 @@ bool SurfaceTopology::separates(const std::vector<int>& loop) {
   const auto& mesh = impl_->mesh;
   const auto& adj = impl_->adj;
   int c = impl_->vertex_label[loop[0]];
-  // A simple loop through vertices that each have one disc of faces around them, on a closed component, has
-  // two sides along its whole length (one, if the surface is not orientable there), each connected: it
-  // separates exactly when they are apart, which is when it bounds a set of faces, i.e. is null in Z/2
-  // homology. That costs the loop's length; the flood below costs the whole component.
+  // A simple loop through vertices that each have one oriented disc of faces around them, on a closed
+  // component, has two sides along its whole length, each connected: it separates exactly when they are
+  // apart, which is when it bounds a set of faces, i.e. is null in Z/2 homology. That costs the loop's
+  // length; the flood below costs the whole component.
   if (c >= 0 && impl_->closed[c] && loop_is_simple(loop) &&
-      std::all_of(loop.begin(), loop.end(), [&](int v) { return one_disc_around(mesh, adj, v); }))
+      std::all_of(loop.begin(), loop.end(), [&](int v) { return turns_once_around(mesh, adj, v); }))
     return impl_->homology().null_homologous(loop);
   auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
   std::unordered_set<std::uint64_t> cut;

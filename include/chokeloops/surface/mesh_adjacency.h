@@ -66,6 +66,10 @@ int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double,
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh);
 
+// Whether turning around vertex v from face to face through twins visits each of its faces once: its faces
+// form one consistently oriented disc around it (no border, no pinch, no flipped face at v).
+bool turns_once_around(const SurfaceMesh& mesh, const MeshAdjacency& adjacency, int v);
+
 // surface_stats(mesh) from an adjacency already built for `mesh` (the same numbers, without building it).
 SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
 
