@@ -190,8 +190,8 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
   }
   std::uint8_t* mark = marks.data.get();
   // mark: 0 unreached; else kSeen | side * 16 | code, code = 1 + the neighbour index it was reached by,
-  // kRoot at a lobe, kFromOut when reached from the outside of the grid.
-  constexpr std::uint8_t kRoot = 15, kFromOut = 0, kSeen = 0x80;
+  // kRoot at a lobe.
+  constexpr std::uint8_t kRoot = 15, kSeen = 0x80;
   int out_side = -1;  // the side that reached the outside node first
   Id out_parent = -1;  // and from which border vertex (-1: it is that side's lobe)
   std::vector<Id> touched;
@@ -207,7 +207,7 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
     }
     frontier[side].push_back(lobe);
   }
-  auto side_of = [&](Id v) { return v == kOut ? out_side : (mark[v] >> 4) & 1; };
+  auto side_of = [&](Id v) { return (mark[v] >> 4) & 1; };  // of a marked grid vertex
   auto chain = [&](Id v) {  // from v back to its root
     std::vector<Id> out{v};
     for (;;) {
@@ -217,7 +217,7 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
       } else {
         const int code = mark[v] & 15;
         if (code == kRoot) break;
-        v = code == kFromOut ? kOut : v - cx.neighbor_delta(code - 1);
+        v -= cx.neighbor_delta(code - 1);
       }
       out.push_back(v);
     }
@@ -284,40 +284,13 @@ Polyline3 generator_cycle(const ScalarGrid& grid, const Choke& c) {
       expand(side, x, xc, [&](Id u) { open[side].push({to_border(u), u}); });
     }
   }
+  // A handle's sides meet inside the solid (its lobes are grid vertices): breadth first, the smaller
+  // frontier growing.
   while (handle && path.empty() && !frontier[0].empty() && !frontier[1].empty()) {
     const int side = frontier[0].size() <= frontier[1].size() ? 0 : 1;
     std::vector<Id> next;
     for (Id x : frontier[side]) {
-      if (x == kOut) {  // into the grid at every border vertex of the region
-        for (int k = 0; k < grid.dims[2] && path.empty(); ++k)
-          for (int j = 0; j < grid.dims[1] && path.empty(); ++j)
-            for (int i = 0; i < grid.dims[0] && path.empty(); ++i) {
-              if (!on_border({i, j, k})) continue;
-              const Id u = cx.vertex(i, j, k);
-              if (mark[u] == 0) {
-                if (!beyond(u)) continue;
-                mark[u] = std::uint8_t(kSeen | side * 16 | kFromOut);
-                touched.push_back(u);
-                next.push_back(u);
-              } else if (side_of(u) != side) {
-                meet(side, kOut, u);
-              }
-              if (i == 0 && j > 0 && j < grid.dims[1] - 1 && k > 0 && k < grid.dims[2] - 1) i = grid.dims[0] - 2;  // skip the interior of the row
-            }
-        if (!path.empty()) break;
-        continue;
-      }
-      const auto xc = cx.coords(x);
-      if (!handle && on_border(xc)) {
-        if (out_side < 0) {
-          out_side = side, out_parent = x;
-          next.push_back(kOut);
-        } else if (out_side != side) {
-          meet(side, x, kOut);
-          break;
-        }
-      }
-      expand(side, x, xc, [&](Id u) { next.push_back(u); });
+      expand(side, x, cx.coords(x), [&](Id u) { next.push_back(u); });
       if (!path.empty()) break;
     }
     frontier[side].swap(next);
