@@ -29,6 +29,9 @@ set(CHOKELOOPS_FUZZ_FLAGS ${CHOKELOOPS_FUZZ_OPT} -g -fsanitize=fuzzer-no-link,ad
 file(GLOB CHOKELOOPS_FUZZ_INPUT_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/io/*.cpp
   ${PROJECT_SOURCE_DIR}/src/field/*.cpp)
 add_library(chokeloops_fuzz_input STATIC ${CHOKELOOPS_FUZZ_INPUT_SOURCES})
+# the lists change what the compiler emits, so an edit to them rebuilds what they apply to
+set_source_files_properties(${CHOKELOOPS_FUZZ_INPUT_SOURCES} PROPERTIES OBJECT_DEPENDS
+  "${PROJECT_SOURCE_DIR}/cmake/fuzz_ignorelist.txt;${PROJECT_SOURCE_DIR}/cmake/fuzz_coverage_ignorelist.txt")
 target_include_directories(chokeloops_fuzz_input PUBLIC ${PROJECT_SOURCE_DIR}/include PRIVATE ${PROJECT_SOURCE_DIR}/src)
 target_compile_definitions(chokeloops_fuzz_input PUBLIC CHOKELOOPS_VERSION="${PROJECT_VERSION}"
   CHOKELOOPS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
