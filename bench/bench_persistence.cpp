@@ -9,11 +9,18 @@
 // --peer-phat MAX_N also runs the peer on every size up to MAX_N, in the same run on the same field:
 // PHAT's twist reduction of the explicit boundary matrix (tests/phat_oracle.h), with its time, peak RSS,
 // the ratio to chokeloops' wall time, and a check that both give the same number of pairs.
+// --peer-cubicalripser BIN runs CubicalRipser (built from its public sources, bench/README.md) on the same
+// field, written as a float64 .npy, in its own process: wall time from exec to exit (reading the .npy
+// included, as chokeloops' wall time here excludes making the field), peak RSS by wait4, median of
+// min(runs, 3). Its pairs are those of the cubical complex (V-construction), not Freudenthal's, so only the
+// times and the memory are compared.
 //
 // usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random]
-//                          [--threads N] [--peer-phat MAX_N]
+//                          [--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN]
 #include <sys/resource.h>
+#include <sys/time.h>
 #include <sys/wait.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,6 +28,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -126,6 +134,81 @@ Result measure(const std::string& field, int n, int runs, bool phat) {
   return r;
 }
 
+// The field as a C-order float64 .npy (NumPy format 1.0), axis 0 slowest: the layout CubicalRipser reads.
+void write_npy(const ScalarGrid& g, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  std::string header = "{'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(g.dims[2]) + ", " +
+                       std::to_string(g.dims[1]) + ", " + std::to_string(g.dims[0]) + "), }";
+  header.append(64 - (10 + header.size() + 1) % 64, ' ');
+  header += '\n';
+  const unsigned short len = (unsigned short)header.size();
+  out.write("\x93NUMPY\x01\x00", 8);
+  out.write(reinterpret_cast<const char*>(&len), 2);
+  out << header;
+  std::vector<double> row(g.values.size());
+  for (std::size_t i = 0; i < row.size(); ++i) row[i] = g.values[i];  // x fastest: the grid's own order
+  out.write(reinterpret_cast<const char*>(row.data()), std::streamsize(row.size() * sizeof(double)));
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+// Runs argv as a child process; wall seconds and its peak RSS (MB) from wait4. False if it failed.
+bool run_peer(const std::vector<std::string>& argv, double& seconds, double& peak_mb, std::string& error) {
+  std::vector<char*> args;
+  for (auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  std::fflush(stdout);
+  auto t = std::chrono::steady_clock::now();
+  pid_t pid = fork();
+  if (pid < 0) { error = "fork failed"; return false; }
+  if (pid == 0) {
+    int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  int status = 0;
+  struct rusage ru;
+  wait4(pid, &status, 0, &ru);
+  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  peak_mb = double(ru.ru_maxrss) / 1024.0;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    error = argv[0] + (WIFSIGNALED(status) ? " killed by signal " + std::to_string(WTERMSIG(status))
+                                           : " exited with " + std::to_string(WEXITSTATUS(status)));
+    return false;
+  }
+  return true;
+}
+
+// CubicalRipser on the same field: dims 0-2, no output file, median wall time of `runs`.
+Result measure_cubicalripser(const std::string& bin, const std::string& field, int n, int runs) {
+  Result r;
+  char dir[] = "/tmp/bench_persistence_XXXXXX";
+  if (!mkdtemp(dir)) { std::snprintf(r.error, sizeof r.error, "mkdtemp failed"); return r; }
+  const std::string npy = std::string(dir) + "/field.npy";
+  {
+    ScalarGrid g = make_field(field, n);
+    write_npy(g, npy);
+  }
+  std::vector<double> wall;
+  for (int i = 0; i < runs; ++i) {
+    double sec = 0, mb = 0;
+    std::string error;
+    if (!run_peer({bin, "--maxdim", "2", "--output", "none", npy}, sec, mb, error)) {
+      std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
+      break;
+    }
+    wall.push_back(sec);
+    r.peak_rss_mb = std::max(r.peak_rss_mb, mb);
+  }
+  std::remove(npy.c_str());
+  rmdir(dir);
+  if (wall.size() == std::size_t(runs)) {
+    r.total = r.wall = median(wall);
+    r.ok = 1;
+  }
+  return r;
+}
+
 // Runs `measure` in a child process and returns its result through a pipe.
 Result measure_in_child(const std::string& field, int n, int runs, int threads, bool phat = false) {
   int fd[2];
@@ -187,6 +270,7 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
   chokeloops::restart_with_huge_pages(argv);
   int runs = 5, threads = 0, peer_max = 0;
+  std::string cubicalripser;
   bool large = false;
   std::vector<int> sizes{128, 256};
   std::vector<std::string> fields{"torus", "noise", "random"};
@@ -202,6 +286,7 @@ int main(int argc, char** argv) {
     if (a == "--runs") runs = std::max(1, std::atoi(value().c_str()));
     else if (a == "--large") large = true;
     else if (a == "--peer-phat") peer_max = std::atoi(value().c_str());
+    else if (a == "--peer-cubicalripser") cubicalripser = value();
     else if (a == "--threads") threads = std::atoi(value().c_str());
     else if (a == "--sizes") {
       sizes.clear();
@@ -210,7 +295,7 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random] "
-                   "[--threads N] [--peer-phat MAX_N]\n");
+                   "[--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN]\n");
       return a == "-h" || a == "--help" ? 0 : 2;
     }
   }
@@ -236,6 +321,17 @@ int main(int argc, char** argv) {
                     r.pairs[2], r.join_saddles, r.split_saddles, r.peak_rss_mb);
       }
       std::fflush(stdout);
+      if (!cubicalripser.empty() && r.ok) {
+        Result c = measure_cubicalripser(cubicalripser, f, n, std::min(runs, 3));
+        if (!c.ok) {
+          std::printf("| CubicalRipser | %d^3 | failed: %s |\n", n, c.error);
+          ++failures;
+        } else {
+          std::printf("| CubicalRipser (1 thread, cubical complex): %s | %d^3 | | | | | | %.3f (%.1fx chokeloops) | | | | | | %.0f (%.1fx) |\n",
+                      field_label(f), n, c.wall, c.wall / r.wall, c.peak_rss_mb, c.peak_rss_mb / r.peak_rss_mb);
+        }
+        std::fflush(stdout);
+      }
       if (n > peer_max || !r.ok) continue;
       Result p = measure_in_child(f, n, std::min(runs, 3), threads, true);
       if (!p.ok) {
