@@ -205,6 +205,19 @@ TEST(OracleShapes, SampledSdfsEqualPhat) {
   }
 }
 
+// A rough field as the bench's noise case is at 256^3 (noise of several voxels, the dimension-1 pairs in their
+// thousands), large enough that many dim-1 columns need additions after their first reduction: each of the
+// engine's two dim-1 phases is compared pair for pair.
+TEST(OracleShapes, RoughTorusAt40CubedEqualsPhat) {
+  ScalarGrid g = sample_field({40, 40, 40}, analytic::torus(0.3, 0.12));
+  add_uniform_noise(g, 0.1, 2026);
+  const PersistenceDiagram d = lower_star_persistence(g);
+  EXPECT_GT(d.count(1), 3000u);
+  std::string diff = compare_with_oracle(g);
+  if (!diff.empty()) record_failure("torus_rough40", g, diff);
+  EXPECT_TRUE(diff.empty()) << diff;
+}
+
 // -0.0 and +0.0 are equal values: the order between them is by linear index only (vertex_less).
 TEST(OracleEdgeCases, SignedZerosAreEqualValues) {
   for (unsigned seed : {11u, 12u, 13u}) {

@@ -14,8 +14,9 @@
 //  * dim 1: the edges left by dim 0 and the triangles left by dim 2 are paired by reducing only the
 //    boundaries of those triangles; a pivot edge paired inside its own lower star is replaced by the rest
 //    of that pair's cone (a path in the lower link), negative edges are compressed away. That needs no
-//    other column until the first birth edge becomes the pivot, so every death triangle gets that far in
-//    parallel (DMS-style); only the ~15% of columns whose pivot is already owned continue sequentially.
+//    other column, so every death triangle's boundary is reduced in parallel (DMS-style) until only birth
+//    edges are left, kept as their ranks; the ~25% of columns (on rough fields) whose pivot is already
+//    owned then add other columns sequentially, as merges of short sorted rank lists.
 // Everything but that sequential remainder of dim 1 and the union-find merges runs in parallel; every step
 // is deterministic.
 #include "chokeloops/topology/persistence.h"
@@ -180,7 +181,9 @@ void Engine::index_birth_list() {
   std::size_t cap = 16;
   while (cap < 2 * birth_list_.size()) cap *= 2;
   birth_table_.assign(cap, kOutside);
+  has_births_.assign((std::size_t(V_) + 63) / 64, 0);
   for (std::uint32_t i = 0; i < birth_list_.size(); ++i) {
+    has_births_[birth_list_[i].saddle >> 6] |= std::uint64_t(1) << (birth_list_[i].saddle & 63);
     std::size_t h = hash_vertex(birth_list_[i].saddle);
     while (birth_table_[h] != kOutside) h = (h + 1) & (cap - 1);
     birth_table_[h] = i;

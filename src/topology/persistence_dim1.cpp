@@ -1,10 +1,12 @@
 // Dimension 1 of the lower-star persistence engine (see persistence.cpp for the whole): the edges left by
 // dim 0 and the triangles left by dim 2 are paired by reducing only the boundaries of those triangles.
 #include <tbb/parallel_for.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <deque>
+#include <memory>
 #include <queue>
 #include <stdexcept>
 #include <string>
@@ -13,9 +15,7 @@
 
 namespace chokeloops::detail {
 
-const LowerLinkInfo& Engine::lower_link(Id v) {
-  std::uint32_t index = __atomic_load_n(&link_index_[v], __ATOMIC_ACQUIRE);
-  if (index != kOutside) return link_infos_[index];
+LowerLinkInfo Engine::compute_lower_link(Id v) const {
   LowerLinkInfo info;
   std::uint16_t outside;
   masks(v, info.lower, outside);
@@ -45,11 +45,16 @@ const LowerLinkInfo& Engine::lower_link(Id v) {
     }
   }
   if (n_lower) info.lowest = std::int8_t(order[0]);
-  auto it = link_infos_.push_back(info);
-  std::uint32_t mine = std::uint32_t(it - link_infos_.begin()), expected = kOutside;
-  if (__atomic_compare_exchange_n(&link_index_[v], &expected, mine, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
-    return *it;
-  return link_infos_[expected];
+  return info;
+}
+
+const LowerLinkInfo& Engine::LinkCache::get(const Engine& engine, Id v) {
+  const std::size_t h = std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits));
+  if (key[h] != v) {
+    key[h] = v;
+    info[h] = engine.compute_lower_link(v);
+  }
+  return info[h];
 }
 
 template <class Push>
@@ -78,14 +83,14 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
 }
 
 template <class Heap>
-bool Engine::pop_to_birth_pivot(Heap& heap, EdgeKey& p) {
+bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank) {
   while (!heap.empty()) {
     p = heap.top();
     heap.pop();
     bool odd = true;
     while (!heap.empty() && heap.top() == p) { heap.pop(); odd = !odd; }
     if (!odd) continue;
-    const LowerLinkInfo& info = lower_link(p.hi);
+    const LowerLinkInfo& info = links.get(*this, p.hi);
     int x = slot(p.hi, p.lo);
     if (info.killer[x] >= 0) {
       expand_local_pair(p.hi, info, x, [&](const EdgeKey& e) { heap.push(e); });
@@ -93,34 +98,59 @@ bool Engine::pop_to_birth_pivot(Heap& heap, EdgeKey& p) {
     }
     // A root's edge is negative (it attaches p.hi, or merges two components) unless dim 0 left it as a
     // birth; the lowest root's edge always attaches. Negative edges are compressed away.
-    if (x != info.lowest && is_birth_edge(p.hi, x)) return true;
+    if (x == info.lowest) continue;
+    const BirthSlots* b = birth_slots(p.hi);
+    if (b && (b->mask >> x & 1)) {
+      rank = birth_rank_in(*b, p.hi, p.lo);
+      return true;
+    }
   }
   return false;
 }
 
 template <class Heap>
-void Engine::drain(Heap& heap, const EdgeKey& pivot, std::vector<EdgeKey>& out) {
+void Engine::drain_ranks(Heap& heap, LinkCache& links, std::uint32_t pivot, std::vector<std::uint32_t>& out) {
   out.push_back(pivot);
-  while (!heap.empty()) {
-    EdgeKey q = heap.top();
-    heap.pop();
-    bool odd = true;
-    while (!heap.empty() && heap.top() == q) { heap.pop(); odd = !odd; }
-    if (odd) out.push_back(q);
+  EdgeKey q;
+  std::uint32_t r;
+  while (pop_to_birth_pivot(heap, links, q, r)) out.push_back(r);
+}
+
+EdgeKey Engine::birth_edge(std::uint32_t rank) const {
+  auto after = std::upper_bound(birth_list_.begin(), birth_list_.end(), rank,
+                                [](std::uint32_t r, const BirthSlots& b) { return r < b.base; });
+  const BirthSlots& b = *(after - 1);
+  std::array<int, 14> order;
+  const int n = lower_slots_in_order(b.saddle, b.mask, order);
+  const std::uint32_t k = rank - b.base;
+  if (k >= std::uint32_t(n)) throw InternalError("dim-1 birth rank out of range");
+  return make_edge(b.saddle, b.saddle + delta_[order[k]]);
+}
+
+// Adds `add` to the column `col` (both in descending rank order) modulo 2, into `out`.
+static void add_columns(const std::uint32_t* a, const std::uint32_t* a_end, const std::uint32_t* b,
+                        const std::uint32_t* b_end, std::vector<std::uint32_t>& out) {
+  out.clear();
+  while (a != a_end && b != b_end) {
+    if (*a > *b) out.push_back(*a++);
+    else if (*b > *a) out.push_back(*b++);
+    else { ++a; ++b; }
   }
+  out.insert(out.end(), a, a_end);
+  out.insert(out.end(), b, b_end);
 }
 
 void Engine::dim1(PersistenceDiagram& out) {
   if (births1_ != deaths1_.size())
     throw InternalError("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                            std::to_string(deaths1_.size()) + ")");
-  link_index_.assign(V_, kOutside);
   auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
   using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)>;
-  // In parallel: each death triangle's boundary up to its first birth pivot, which needs no other column.
-  // Most columns end there (their pivot is not owned yet); the rest continue below in filtration order.
-  // This part is order-free, so it runs in grid order: neighbouring triangles share lower links and
-  // field memory, which the filtration order scatters.
+  // In parallel: each death triangle's boundary reduced to birth edges alone (each edge paired inside its
+  // own lower star is replaced by the rest of its pair's cone; negative edges are dropped), kept as the birth
+  // edges' ranks in descending order. The columns are then short and need no lower link again: the
+  // sequential pass below only adds sorted rank lists. This part is order-free, so it runs in grid order:
+  // neighbouring triangles share lower links and field memory, which the filtration order scatters.
   const std::size_t n = deaths1_.size();
   std::vector<std::uint32_t> grid_order(n);
   for (std::size_t i = 0; i < n; ++i) grid_order[i] = std::uint32_t(i);
@@ -130,10 +160,13 @@ void Engine::dim1(PersistenceDiagram& out) {
   struct Where { std::uint32_t chunk, begin, end; };
   std::vector<Where> where(n);
   const std::size_t chunk = 2048, nchunks = (n + chunk - 1) / chunk;
-  std::vector<std::vector<EdgeKey>> first(nchunks);
+  std::vector<std::vector<std::uint32_t>> first(nchunks);
+  tbb::enumerable_thread_specific<std::unique_ptr<LinkCache>> caches;
   tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+    std::unique_ptr<LinkCache>& links = caches.local();
+    if (!links) links = std::make_unique<LinkCache>();
     Heap heap(heap_less);
-    std::vector<EdgeKey>& entries = first[c];
+    std::vector<std::uint32_t>& entries = first[c];
     for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
       const std::uint32_t i = grid_order[k];
       const auto& tau = deaths1_[i].v;
@@ -143,36 +176,36 @@ void Engine::dim1(PersistenceDiagram& out) {
       where[i].chunk = std::uint32_t(c);
       where[i].begin = std::uint32_t(entries.size());
       EdgeKey p;
-      if (pop_to_birth_pivot(heap, p)) drain(heap, p, entries);
+      std::uint32_t r;
+      if (pop_to_birth_pivot(heap, *links, p, r)) drain_ranks(heap, *links, r, entries);
       where[i].end = std::uint32_t(entries.size());
     }
   });
   std::vector<std::uint32_t>().swap(grid_order);
   report("dim 1", 0.8);
-  // In filtration order: a column whose pivot is owned adds the owner's column and goes on reducing.
-  struct Span { const EdgeKey* begin; const EdgeKey* end; };
+  // In filtration order: a column whose pivot is owned adds the owner's column until its pivot is free.
+  struct Span { const std::uint32_t* begin; const std::uint32_t* end; };
   std::vector<Span> owner(births1_, Span{nullptr, nullptr});
-  std::deque<std::vector<EdgeKey>> continued;  // columns that needed additions (stable addresses)
-  Heap heap(heap_less);
+  std::deque<std::vector<std::uint32_t>> continued;  // columns that needed additions (stable addresses)
+  std::vector<std::uint32_t> sum, scratch;
   for (std::size_t i = 0; i < n; ++i) {
     const Where& w = where[i];
     if (w.begin == w.end) throw InternalError("a dim-1 death triangle reduced to zero");
     Span column{first[w.chunk].data() + w.begin, first[w.chunk].data() + w.end};
-    EdgeKey p = *column.begin;
-    std::uint32_t r = birth_rank(p.hi, p.lo);
+    std::uint32_t r = *column.begin;
     if (owner[r].begin) {
-      for (const EdgeKey* e = column.begin + 1; e != column.end; ++e) heap.push(*e);
-      for (;;) {
-        for (const EdgeKey* e = owner[r].begin + 1; e != owner[r].end; ++e) heap.push(*e);
-        if (!pop_to_birth_pivot(heap, p)) throw InternalError("a dim-1 death triangle reduced to zero");
-        r = birth_rank(p.hi, p.lo);
-        if (!owner[r].begin) break;
-      }
-      continued.emplace_back();
-      drain(heap, p, continued.back());
+      sum.assign(column.begin, column.end);
+      do {
+        add_columns(sum.data(), sum.data() + sum.size(), owner[r].begin, owner[r].end, scratch);
+        sum.swap(scratch);
+        if (sum.empty()) throw InternalError("a dim-1 death triangle reduced to zero");
+        r = sum.front();
+      } while (owner[r].begin);
+      continued.emplace_back(sum);
       column = {continued.back().data(), continued.back().data() + continued.back().size()};
     }
     owner[r] = column;
+    const EdgeKey p = birth_edge(r);
     const auto& tau = deaths1_[i].v;
     PersistencePair pr;
     pr.dim = 1;
@@ -182,7 +215,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     pr.birth_vertex = p.hi;
     pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
     pr.death_vertex = tau[0];
-    pr.birth_lobes = {p.hi + delta_[lower_link(p.hi).lowest], p.lo};
+    pr.birth_lobes = {p.hi + delta_[lowest_slot(p.hi)], p.lo};
     pr.death_lobes = deaths1_[i].lobes;
     out.pairs.push_back(pr);
   }

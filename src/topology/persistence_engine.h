@@ -1,8 +1,6 @@
 #pragma once
 // The lower-star persistence engine's state and steps, shared by persistence.cpp (classification, dims 0
 // and 2, the driver) and persistence_dim1.cpp (the dim-1 reduction). Internal: not installed.
-#include <tbb/concurrent_vector.h>
-
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -115,6 +113,7 @@ class Engine {
     return (std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> 32) & (birth_table_.size() - 1);
   }
   const BirthSlots* birth_slots(Id s) const {
+    if (!(has_births_[std::size_t(s) >> 6] >> (s & 63) & 1)) return nullptr;
     for (std::size_t h = hash_vertex(std::uint32_t(s));; h = (h + 1) & (birth_table_.size() - 1)) {
       std::uint32_t i = birth_table_[h];
       if (i == kOutside) return nullptr;
@@ -137,8 +136,15 @@ class Engine {
   void dim2(PersistenceDiagram& out);
   std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
 
-  // Thread-safe memo: the first thread to publish an index wins; a loser's copy is identical and unused.
-  const LowerLinkInfo& lower_link(Id v);
+  LowerLinkInfo compute_lower_link(Id v) const;
+  // A thread's cache of lower links, direct-mapped by a hash of the vertex: the columns are reduced in grid
+  // order, so the links they need are mostly recent ones, and a miss only recomputes.
+  struct LinkCache {
+    static constexpr int kBits = 13;
+    std::vector<Id> key = std::vector<Id>(std::size_t(1) << kBits, Id(-1));
+    std::vector<LowerLinkInfo> info = std::vector<LowerLinkInfo>(std::size_t(1) << kBits);
+    const LowerLinkInfo& get(const Engine& engine, Id v);
+  };
   EdgeKey make_edge(Id a, Id b) const {
     float fa = f_[a], fb = f_[b];
     bool a_lower = fa < fb || (fa == fb && a < b);
@@ -152,26 +158,36 @@ class Engine {
 
   // Rank of birth edge (s, x) among all dim-1 birth edges in filtration order: the saddles' order, then
   // each saddle's lower ends in order.
-  std::uint32_t birth_rank(Id s, Id x) const {
-    const BirthSlots* b = birth_slots(s);
-    std::uint32_t r = b->base;
-    for (unsigned m = b->mask; m; m &= m - 1)
+  std::uint32_t birth_rank_in(const BirthSlots& b, Id s, Id x) const {
+    std::uint32_t r = b.base;
+    for (unsigned m = b.mask; m; m &= m - 1)
       if (less(s + delta_[__builtin_ctz(m)], x)) ++r;
     return r;
-  }
-  bool is_birth_edge(Id s, int slot_of_x) const {
-    const BirthSlots* b = birth_slots(s);
-    return b && (b->mask >> slot_of_x & 1);
   }
 
   // Pops the chain's edges from the top until one is a dim-1 birth edge, which is returned (popped): an edge
   // paired inside its own lower star is replaced by the rest of that pair's cone (this adds a boundary, so
   // the pivot is the one the full boundary matrix gives); a negative edge is dropped (compression).
+  // rank: the birth edge's rank.
   template <class Heap>
-  bool pop_to_birth_pivot(Heap& heap, EdgeKey& p);
-  // Appends the pivot and the rest of the chain, descending, cancelling pairs.
+  bool pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank);
+  // Appends the ranks of the pivot and of the chain's other birth edges, descending: the chain reduced
+  // inside the lower stars and compressed, so that only birth edges are left.
   template <class Heap>
-  static void drain(Heap& heap, const EdgeKey& pivot, std::vector<EdgeKey>& out);
+  void drain_ranks(Heap& heap, LinkCache& links, std::uint32_t pivot, std::vector<std::uint32_t>& out);
+  // The birth edge of a rank (birth_rank_in's inverse).
+  EdgeKey birth_edge(std::uint32_t rank) const;
+  // The link slot of v's lowest lower neighbour.
+  int lowest_slot(Id v) const {
+    std::uint16_t lower, outside;
+    masks(v, lower, outside);
+    int best = -1;
+    for (unsigned m = lower; m; m &= m - 1) {
+      int n = __builtin_ctz(m);
+      if (best < 0 || less(v + delta_[n], v + delta_[best])) best = n;
+    }
+    return best;
+  }
 
   void dim1(PersistenceDiagram& out);
 
@@ -191,11 +207,10 @@ class Engine {
   Id minima_ = 0, maxima_ = 0;
   std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
   std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
+  std::vector<std::uint64_t> has_births_;    // a bit per vertex: in birth_list_ (most lookups are misses)
   std::size_t births1_ = 0;
   struct Death1 { std::array<Id, 3> v; std::array<Id, 2> lobes; };  // v: highest to lowest vertex
   std::vector<Death1> deaths1_;
-  std::vector<std::uint32_t> link_index_;  // per vertex: index into link_infos_, or kOutside if not computed
-  tbb::concurrent_vector<LowerLinkInfo> link_infos_;
 };
 
 }  // namespace chokeloops::detail
