@@ -12,6 +12,8 @@
 #                        decoding reads for mesh_levelset and vdb_levelset)
 #   FUZZ_BUILD_TYPE=T    CMAKE_BUILD_TYPE of the fuzz build (default RelWithDebInfo: -O2 -g, assertions on)
 #   FUZZ_UPDATE_CORPUS=1 merges what a run found into fuzz/corpus/NAME (minimised: only inputs that add coverage).
+#   FUZZ_TIMEOUT=S       an input running longer than S seconds is a finding (default 20; raise it for a long run
+#                        that will be paused with SIGSTOP while something else is measured: the clock runs on)
 #   FUZZ_ASAN_OPTIONS=O  more ASAN_OPTIONS for the harnesses (detect_leaks=0 is always set)
 #   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
 set -euo pipefail
@@ -46,7 +48,7 @@ for name in "${NAMES[@]}"; do
   stamp="$findings/.started"; touch "$stamp"  # findings of earlier runs stay, and are not counted again
   ASAN_OPTIONS="detect_leaks=0${FUZZ_ASAN_OPTIONS:+:$FUZZ_ASAN_OPTIONS}" "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
     -rss_limit_mb="$rss_mb" "${extra[@]}" \
-    -timeout=20 -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
+    -timeout="${FUZZ_TIMEOUT:-20}" -print_final_stats=1 -artifact_prefix="$findings/" "$work" "$ROOT/fuzz/corpus/$name" >"$log" 2>&1 || true
   runs=$(grep -ao 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || true)
   [ -n "$runs" ] || runs=$(grep -ao '^#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   took=$(( $(date +%s) - start ))
