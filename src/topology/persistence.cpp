@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <string>
 
 #include "persistence_engine.h"
 
@@ -53,19 +54,30 @@ PersistenceDiagram Engine::run() {
   out.stats.seconds_classify = seconds_since(t0);
   auto t = Clock::now();
   report("dim 0", 0.3);
+  out.pairs.reserve(std::size_t(minima_));
   dim0(out);
+  // each pointer array and saddle list is read by its own dimension only
+  out.stats.join_saddles = Id(joins_.size());
+  std::vector<std::uint32_t>().swap(desc_);
+  std::vector<std::uint32_t>().swap(joins_);
+  const std::size_t end0 = out.pairs.size();
   out.stats.seconds_dim0 = seconds_since(t);
   t = Clock::now();
   report("dim 2", 0.45);
+  // the whole diagram at once (a maximum dies at most once; every dim-1 birth dies): no doubling, and
+  // no copy of the largest array while it is full
+  out.pairs.reserve(out.pairs.size() + std::size_t(maxima_) + births1_);
   dim2(out);
+  out.stats.split_saddles = Id(splits_.size());
+  std::vector<std::uint32_t>().swap(asc_);
+  std::vector<std::uint32_t>().swap(splits_);
+  const std::size_t end2 = out.pairs.size();
   out.stats.seconds_dim2 = seconds_since(t);
   t = Clock::now();
   report("dim 1", 0.6);
   dim1(out);
   out.stats.seconds_dim1 = seconds_since(t);
-  finish(out);
-  out.stats.join_saddles = Id(joins_.size());
-  out.stats.split_saddles = Id(splits_.size());
+  finish(out, end0, end2);
   out.stats.minima = minima_;
   out.stats.maxima = maxima_;
   out.stats.seconds_total = seconds_since(t0);
@@ -179,7 +191,7 @@ void Engine::dim0(PersistenceDiagram& out) {
 
 void Engine::index_birth_list() {
   std::size_t cap = 16;
-  while (cap < 2 * birth_list_.size()) cap *= 2;
+  while (2 * cap < 3 * birth_list_.size()) cap *= 2;  // load <= 2/3: has_births_ answers the misses
   birth_table_.assign(cap, kOutside);
   has_births_.assign((std::size_t(V_) + 63) / 64, 0);
   for (std::uint32_t i = 0; i < birth_list_.size(); ++i) {
@@ -256,8 +268,7 @@ void Engine::dim2(PersistenceDiagram& out) {
       std::uint32_t g1 = find(asc_, root_up(ct.rep1)), g2 = find(asc_, root_up(ct.rep2));
       Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
       if (g1 == g2) {
-        auto d = sorted_descending(f_, std::array<Id, 3>{s, a, b});
-        deaths1_.push_back({d, {ct.lobe1, ct.lobe2}});
+        deaths1_.push_back({cx_.triangle_id(s, a, b), {std::int32_t(ct.lobe1), std::int32_t(ct.lobe2)}});
         continue;
       }
       bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
@@ -275,9 +286,10 @@ void Engine::dim2(PersistenceDiagram& out) {
       out.pairs.push_back(p);
     }
   std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
+  deaths1_.shrink_to_fit();  // kept through the parallel pass of dim 1
 }
 
-void Engine::finish(PersistenceDiagram& out) {
+void Engine::finish(PersistenceDiagram& out, std::size_t end0, std::size_t end2) {
   Id gmin = 0;
   for (Id v = 1; v < V_; ++v)
     if (less(v, gmin)) gmin = v;
@@ -287,9 +299,9 @@ void Engine::finish(PersistenceDiagram& out) {
   e.death = std::numeric_limits<float>::infinity();
   e.birth_simplex = e.birth_vertex = gmin;
   out.essential.push_back(e);
-  // Discovery order is deterministic (saddles in filtration order); group by dimension.
-  std::stable_sort(out.pairs.begin(), out.pairs.end(),
-                   [](const PersistencePair& a, const PersistencePair& b) { return a.dim < b.dim; });
+  // Discovery order is deterministic (saddles in filtration order); the pairs came as dims 0, 2, 1, each
+  // block in its own order: grouped by dimension in place (a stable sort would copy the whole diagram).
+  std::rotate(out.pairs.begin() + std::ptrdiff_t(end0), out.pairs.begin() + std::ptrdiff_t(end2), out.pairs.end());
 }
 
 }  // namespace detail

@@ -5,7 +5,6 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
-#include <deque>
 #include <memory>
 #include <queue>
 #include <stdexcept>
@@ -144,6 +143,19 @@ void Engine::dim1(PersistenceDiagram& out) {
   if (births1_ != deaths1_.size())
     throw InternalError("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                            std::to_string(deaths1_.size()) + ")");
+  const std::size_t n = deaths1_.size();
+  // the death half of each pair now, in parallel; the sequential pass adds the birth
+  const std::size_t base = out.pairs.size();
+  out.pairs.resize(base + n);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    PersistencePair& pr = out.pairs[base + i];
+    pr.dim = 1;
+    pr.death_simplex = deaths1_[i].triangle;
+    pr.death_vertex = sorted_descending(f_, cx_.triangle_vertices(pr.death_simplex))[0];
+    pr.death = f_[pr.death_vertex];
+    pr.death_lobes = {Id(deaths1_[i].lobes[0]), Id(deaths1_[i].lobes[1])};
+  });
+  std::vector<Death1>().swap(deaths1_);
   auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
   using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)>;
   // In parallel: each death triangle's boundary reduced to birth edges alone (each edge paired inside its
@@ -151,11 +163,11 @@ void Engine::dim1(PersistenceDiagram& out) {
   // edges' ranks in descending order. The columns are then short and need no lower link again: the
   // sequential pass below only adds sorted rank lists. This part is order-free, so it runs in grid order:
   // neighbouring triangles share lower links and field memory, which the filtration order scatters.
-  const std::size_t n = deaths1_.size();
   std::vector<std::uint32_t> grid_order(n);
   for (std::size_t i = 0; i < n; ++i) grid_order[i] = std::uint32_t(i);
-  tbb::parallel_sort(grid_order.begin(), grid_order.end(), [this](std::uint32_t a, std::uint32_t b) {
-    return deaths1_[a].v[0] < deaths1_[b].v[0] || (deaths1_[a].v[0] == deaths1_[b].v[0] && a < b);
+  tbb::parallel_sort(grid_order.begin(), grid_order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const Id va = out.pairs[base + a].death_vertex, vb = out.pairs[base + b].death_vertex;
+    return va < vb || (va == vb && a < b);
   });
   struct Where { std::uint32_t chunk, begin, end; };
   std::vector<Where> where(n);
@@ -169,7 +181,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     std::vector<std::uint32_t>& entries = first[c];
     for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
       const std::uint32_t i = grid_order[k];
-      const auto& tau = deaths1_[i].v;
+      const auto tau = cx_.triangle_vertices(out.pairs[base + i].death_simplex);  // make_edge orders each edge
       heap.push(make_edge(tau[0], tau[1]));
       heap.push(make_edge(tau[0], tau[2]));
       heap.push(make_edge(tau[1], tau[2]));
@@ -180,44 +192,47 @@ void Engine::dim1(PersistenceDiagram& out) {
       if (pop_to_birth_pivot(heap, *links, p, r)) drain_ranks(heap, *links, r, entries);
       where[i].end = std::uint32_t(entries.size());
     }
+    entries.shrink_to_fit();
   });
   std::vector<std::uint32_t>().swap(grid_order);
+  std::vector<std::uint32_t>().swap(birth_table_);  // the ranks are known: no birth edge is looked up again
+  std::vector<std::uint64_t>().swap(has_births_);
   report("dim 1", 0.8);
   // In filtration order: a column whose pivot is owned adds the owner's column until its pivot is free.
-  struct Span { const std::uint32_t* begin; const std::uint32_t* end; };
-  std::vector<Span> owner(births1_, Span{nullptr, nullptr});
-  std::deque<std::vector<std::uint32_t>> continued;  // columns that needed additions (stable addresses)
-  std::vector<std::uint32_t> sum, scratch;
-  for (std::size_t i = 0; i < n; ++i) {
+  // owner: per birth rank, the death whose column has it as pivot; columns that needed additions move to
+  // one pool (where[i].chunk = kPool).
+  constexpr std::uint32_t kPool = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> owner(births1_, kOutside), pool, sum, scratch;
+  auto column_of = [&](std::uint32_t i) {
     const Where& w = where[i];
-    if (w.begin == w.end) throw InternalError("a dim-1 death triangle reduced to zero");
-    Span column{first[w.chunk].data() + w.begin, first[w.chunk].data() + w.end};
-    std::uint32_t r = *column.begin;
-    if (owner[r].begin) {
-      sum.assign(column.begin, column.end);
+    const std::uint32_t* data = w.chunk == kPool ? pool.data() : first[w.chunk].data();
+    return std::make_pair(data + w.begin, data + w.end);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    auto [begin, end] = column_of(std::uint32_t(i));
+    if (begin == end) throw InternalError("a dim-1 death triangle reduced to zero");
+    std::uint32_t r = *begin;
+    if (owner[r] != kOutside) {
+      sum.assign(begin, end);
       do {
-        add_columns(sum.data(), sum.data() + sum.size(), owner[r].begin, owner[r].end, scratch);
+        auto [obegin, oend] = column_of(owner[r]);
+        add_columns(sum.data(), sum.data() + sum.size(), obegin, oend, scratch);
         sum.swap(scratch);
         if (sum.empty()) throw InternalError("a dim-1 death triangle reduced to zero");
         r = sum.front();
-      } while (owner[r].begin);
-      continued.emplace_back(sum);
-      column = {continued.back().data(), continued.back().data() + continued.back().size()};
+      } while (owner[r] != kOutside);
+      if (pool.size() + sum.size() > kPool)
+        throw Error("the dim-1 reduction outgrew its 32-bit column pool; use a coarser resolution", 3);
+      where[i] = {kPool, std::uint32_t(pool.size()), std::uint32_t(pool.size() + sum.size())};
+      pool.insert(pool.end(), sum.begin(), sum.end());
     }
-    owner[r] = column;
+    owner[r] = std::uint32_t(i);
     const EdgeKey p = birth_edge(r);
-    const auto& tau = deaths1_[i].v;
-    PersistencePair pr;
-    pr.dim = 1;
+    PersistencePair& pr = out.pairs[base + i];
     pr.birth = f_[p.hi];
-    pr.death = f_[tau[0]];
     pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
     pr.birth_vertex = p.hi;
-    pr.death_simplex = cx_.triangle_id(tau[0], tau[1], tau[2]);
-    pr.death_vertex = tau[0];
     pr.birth_lobes = {p.hi + delta_[lowest_slot(p.hi)], p.lo};
-    pr.death_lobes = deaths1_[i].lobes;
-    out.pairs.push_back(pr);
   }
 }
 

@@ -140,7 +140,7 @@ class Engine {
   // A thread's cache of lower links, direct-mapped by a hash of the vertex: the columns are reduced in grid
   // order, so the links they need are mostly recent ones, and a miss only recomputes.
   struct LinkCache {
-    static constexpr int kBits = 13;
+    static constexpr int kBits = 16;
     std::vector<Id> key = std::vector<Id>(std::size_t(1) << kBits, Id(-1));
     std::vector<LowerLinkInfo> info = std::vector<LowerLinkInfo>(std::size_t(1) << kBits);
     const LowerLinkInfo& get(const Engine& engine, Id v);
@@ -191,7 +191,8 @@ class Engine {
 
   void dim1(PersistenceDiagram& out);
 
-  void finish(PersistenceDiagram& out);
+  // end0, end2: where the dim-0 and dim-2 pairs end in out.pairs (dims 0, 2 and 1 come in that order).
+  void finish(PersistenceDiagram& out, std::size_t end0, std::size_t end2);
 
   const ScalarGrid& grid_;
   const float* f_;
@@ -209,7 +210,9 @@ class Engine {
   std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
   std::vector<std::uint64_t> has_births_;    // a bit per vertex: in birth_list_ (most lookups are misses)
   std::size_t births1_ = 0;
-  struct Death1 { std::array<Id, 3> v; std::array<Id, 2> lobes; };  // v: highest to lowest vertex
+  // A dim-1 death triangle and the two sides its split saddle joins (32-bit: validate_grid keeps vertex ids
+  // below 2^31; -2 is the outside).
+  struct Death1 { Id triangle; std::array<std::int32_t, 2> lobes; };
   std::vector<Death1> deaths1_;
 };
 
