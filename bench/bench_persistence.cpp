@@ -51,7 +51,7 @@ struct Result {
   double classify = 0, dim0 = 0, dim2 = 0, dim1 = 0, total = 0, wall = 0, make_field = 0;
   long long pairs[3] = {0, 0, 0};
   long long essential = 0, join_saddles = 0, split_saddles = 0, minima = 0, maxima = 0;
-  double peak_rss_mb = 0;
+  double peak_rss_mb = 0, estimate_mb = 0;
   char error[200] = {0};
 };
 
@@ -118,6 +118,7 @@ Result measure(const std::string& field, int n, int runs, bool phat) {
     r.split_saddles = d.stats.split_saddles;
     r.minima = d.stats.minima;
     r.maxima = d.stats.maxima;
+    r.estimate_mb = double(d.stats.estimated_bytes) / double(1 << 20);
   }
   if (!phat) {
     r.classify = median(cl);
@@ -305,8 +306,8 @@ int main(int argc, char** argv) {
               "(fresh process, includes the float field)\n\n",
               runs, threads > 0 ? threads : tbb::info::default_concurrency(), tbb::info::default_concurrency());
   std::printf("| field | n | classify s | dim0 s | dim2 s | dim1 s | total s | wall s | pairs dim0 | dim1 | dim2 | "
-              "joins | splits | peak RSS MB |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "joins | splits | peak RSS MB | guard's estimate MB |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   int failures = 0;
   for (int n : sizes)
@@ -316,9 +317,9 @@ int main(int argc, char** argv) {
         std::printf("| %s | %d^3 | failed: %s |\n", field_label(f), n, r.error);
         ++failures;
       } else {
-        std::printf("| %s | %d^3 | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %lld | %lld | %lld | %lld | %lld | %.0f |\n",
+        std::printf("| %s | %d^3 | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %lld | %lld | %lld | %lld | %lld | %.0f | %.0f |\n",
                     field_label(f), n, r.classify, r.dim0, r.dim2, r.dim1, r.total, r.wall, r.pairs[0], r.pairs[1],
-                    r.pairs[2], r.join_saddles, r.split_saddles, r.peak_rss_mb);
+                    r.pairs[2], r.join_saddles, r.split_saddles, r.peak_rss_mb, r.estimate_mb);
       }
       std::fflush(stdout);
       if (!cubicalripser.empty() && r.ok) {

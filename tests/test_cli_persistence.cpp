@@ -161,3 +161,23 @@ TEST_F(CliPersistence, BadInputsExitWithCode2AndOneLine) {
 }
 
 }  // namespace
+
+// A rough field whose pairs need more than --max-memory: exit code 3 and one line saying what to do, where the
+// same budget takes the smooth field.
+TEST_F(CliPersistence, ARoughFieldOverMaxMemoryExitsWithCode3) {
+  ScalarGrid smooth = sample_field({64, 64, 64}, analytic::torus(0.3, 0.12));
+  ScalarGrid rough = smooth;
+  add_uniform_noise(rough, 0.1, 11);
+  const std::size_t es = lower_star_persistence(smooth).stats.estimated_bytes;
+  const std::size_t er = lower_star_persistence(rough).stats.estimated_bytes;
+  ASSERT_LT(es, er);
+  write_vdb(smooth, path("smooth.vdb"), "sdf");
+  write_vdb(rough, path("rough.vdb"), "sdf");
+  const std::string budget = " --max-memory " + std::to_string((es + er) / 2);
+  auto r = run("'" + path("smooth.vdb") + "' -o '" + path("s.csv") + "'" + budget);
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = run("'" + path("rough.vdb") + "' -o '" + path("r.csv") + "'" + budget);
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--max-memory"), std::string::npos) << r.err;
+}

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "chokeloops/field/levelset.h"
 #include "chokeloops/grid.h"
 #include "chokeloops/topology/persistence.h"
 #include "chokeloops/io/vdb_io.h"
@@ -24,6 +25,7 @@ const char* kUsage =
     "  -o, --output FILE   output .csv (required)\n"
     "  --grid NAME         which grid of the .vdb file (default: the first float grid)\n"
     "  --threads N         use at most N threads (default: all cores)\n"
+    "  --max-memory BYTES  refuse fields whose pairs need more (e.g. 8G; default 80% of RAM)\n"
     "  -q, --quiet         no summary\n"
     "  -h, --help          this help\n"
     "\n"
@@ -34,6 +36,7 @@ int run(std::vector<std::string> args) {
   using namespace chokeloops;
   std::string input, output, grid_name;
   int threads = 0;
+  std::size_t max_memory = 0;
   bool quiet = false;
   cli::Args in("persistence", std::move(args));
   while (in.next()) {
@@ -46,6 +49,8 @@ int run(std::vector<std::string> args) {
       grid_name = in.value();
     } else if (in.is("--threads")) {
       threads = in.threads();
+    } else if (in.is("--max-memory")) {
+      max_memory = parse_bytes(in.value());
     } else if (in.is("-q", "--quiet")) {
       quiet = true;
     } else {
@@ -60,7 +65,7 @@ int run(std::vector<std::string> args) {
   auto t0 = std::chrono::steady_clock::now();
   ScalarGrid grid = read_vdb_dense(input, grid_name);
   auto t1 = std::chrono::steady_clock::now();
-  PersistenceDiagram d = lower_star_persistence(grid);
+  PersistenceDiagram d = lower_star_persistence(grid, {}, max_memory);
   auto t2 = std::chrono::steady_clock::now();
   write_pairs_csv(d, output);
 

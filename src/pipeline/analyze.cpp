@@ -64,7 +64,8 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
     if (progress && !progress(s, f)) throw Error("interrupted");
   };
   auto t = Clock::now();
-  r.diagram = lower_star_persistence(r.grid, [&](const char*, double f) { stage("persistence", f); return true; });
+  r.diagram = lower_star_persistence(
+      r.grid, [&](const char*, double f) { stage("persistence", f); return true; }, options.levelset.max_memory);
   r.timings_ms["persistence"] = ms_since(t);
 
   t = Clock::now();

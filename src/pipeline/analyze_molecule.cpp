@@ -41,7 +41,8 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.timings_ms["levelset"] = ms(t);
 
   t = Clock::now();
-  r.diagram = lower_star_persistence(r.grid, [&](const char*, double f) { stage("persistence", f); return true; });
+  r.diagram = lower_star_persistence(
+      r.grid, [&](const char*, double f) { stage("persistence", f); return true; }, analyze.levelset.max_memory);
   r.timings_ms["persistence"] = ms(t);
   t = Clock::now();
   stage("chokes", 0);

@@ -26,6 +26,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -51,6 +53,7 @@ PersistenceDiagram Engine::run() {
   classify();
   jump(desc_);
   jump(asc_);
+  guard_memory(out);
   out.stats.seconds_classify = seconds_since(t0);
   auto t = Clock::now();
   report("dim 0", 0.3);
@@ -89,7 +92,7 @@ void Engine::classify() {
   desc_.resize(V_);
   asc_.resize(V_);
   const int nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
-  struct Local { std::vector<std::uint32_t> joins, splits; Id minima = 0, maxima = 0; };
+  struct Local { std::vector<std::uint32_t> joins, splits; Id minima = 0, maxima = 0; std::size_t extra_lower = 0, extra_upper = 0; };
   tbb::enumerable_thread_specific<Local> locals;
   tbb::parallel_for(tbb::blocked_range<int>(0, nz * ny), [&](const tbb::blocked_range<int>& r) {
     Local& L = locals.local();
@@ -115,8 +118,14 @@ void Engine::classify() {
         asc_[v] = outside ? kOutside : std::uint32_t(hi);
         if (lower == 0) ++L.minima;
         if (upper == 0) ++L.maxima;
-        if (table_[lower].count >= 2) L.joins.push_back(std::uint32_t(v));
-        if (table_[upper].count >= 2) L.splits.push_back(std::uint32_t(v));
+        if (table_[lower].count >= 2) {
+          L.joins.push_back(std::uint32_t(v));
+          L.extra_lower += table_[lower].count - 1u;
+        }
+        if (table_[upper].count >= 2) {
+          L.splits.push_back(std::uint32_t(v));
+          L.extra_upper += table_[upper].count - 1u;
+        }
       }
     }
   });
@@ -125,10 +134,38 @@ void Engine::classify() {
     splits_.insert(splits_.end(), L.splits.begin(), L.splits.end());
     minima_ += L.minima;
     maxima_ += L.maxima;
+    extra_lower_ += L.extra_lower;
+    extra_upper_ += L.extra_upper;
   }
   auto by_order = [this](std::uint32_t a, std::uint32_t b) { return less(a, b); };
   tbb::parallel_sort(joins_.begin(), joins_.end(), by_order);
   tbb::parallel_sort(splits_.begin(), splits_.end(), [&](std::uint32_t a, std::uint32_t b) { return less(b, a); });
+}
+
+void Engine::guard_memory(PersistenceDiagram& out) {
+  // Every extra lower-link component of a join saddle kills a minimum or gives birth to a 1-cycle; every
+  // extra upper-link component of a split saddle is a cross triangle: a dim-2 birth or a dim-1 death.
+  const std::size_t minima = std::size_t(std::max<Id>(minima_, 1));
+  const std::size_t births1 = extra_lower_ > minima - 1 ? extra_lower_ - (minima - 1) : 0;
+  const std::size_t pairs = minima - 1 + extra_upper_;
+  // The peak is that of dim 2 or of dim 1, from the arrays each holds (bytes per item): the field and the
+  // ascending pointers (4 + 4 a vertex), the split saddles and their cross triangles, the pairs so far, the
+  // dim-1 deaths (16), the birth slots of the join saddles (~18 with their hash entry); then the field, the
+  // whole diagram and per dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
+  const std::size_t birth_slots = joins_.size() * 18, pair = sizeof(PersistencePair);
+  const std::size_t dim2 = std::size_t(V_) * 8 + splits_.size() * 4 + extra_upper_ * sizeof(CrossTriangle) +
+                           (pairs - births1) * pair + births1 * 16 + birth_slots;
+  const std::size_t dim1 = std::size_t(V_) * 4 + pairs * pair + births1 * 36 + birth_slots;
+  const std::size_t classify = std::size_t(V_) * 12;  // the field and both pointer arrays, already held
+  const std::size_t need = std::max({classify, dim2, dim1}) + (std::size_t(32) << 20);
+  out.stats.estimated_bytes = need;
+  if (need <= max_memory_) return;
+  auto mb = [](std::size_t b) { return std::to_string((b + (1u << 20) - 1) >> 20) + " MB"; };
+  throw Error("persistence of this " + std::to_string(grid_.dims[0]) + "x" + std::to_string(grid_.dims[1]) + "x" +
+                  std::to_string(grid_.dims[2]) + " field needs about " + mb(need) + " (" + std::to_string(pairs) +
+                  " pairs: a rough field), more than the " + mb(max_memory_) +
+                  " allowed; smooth or coarsen the field, or raise --max-memory",
+              3);
 }
 
 void Engine::jump(std::vector<std::uint32_t>& p) {
@@ -306,9 +343,14 @@ void Engine::finish(PersistenceDiagram& out, std::size_t end0, std::size_t end2)
 
 }  // namespace detail
 
-PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress) {
+PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress,
+                                          std::size_t max_memory) {
   validate_grid(grid);
-  detail::Engine engine(grid, progress);
+  if (!max_memory) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    max_memory = pages > 0 && page > 0 ? std::size_t(pages) / 10 * 8 * std::size_t(page) : std::size_t(8) << 30;
+  }
+  detail::Engine engine(grid, progress, max_memory);
   return engine.run();
 }
 

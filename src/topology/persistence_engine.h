@@ -45,8 +45,9 @@ struct BirthSlots { std::uint32_t saddle; std::uint16_t mask; std::uint32_t base
 
 class Engine {
  public:
-  Engine(const ScalarGrid& grid, const ProgressFn& progress)
-      : grid_(grid), f_(grid.values.data()), cx_(grid.dims), V_(cx_.vertex_count()), progress_(progress),
+  Engine(const ScalarGrid& grid, const ProgressFn& progress, std::size_t max_memory)
+      : grid_(grid), f_(grid.values.data()), cx_(grid.dims), V_(cx_.vertex_count()), max_memory_(max_memory),
+        progress_(progress),
         table_(detail::link_component_table()), link_(freudenthal::vertex_link()) {
     for (int n = 0; n < 14; ++n) {
       delta_[n] = cx_.neighbor_delta(n);
@@ -92,6 +93,8 @@ class Engine {
   }
 
   void classify();
+  // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
+  void guard_memory(PersistenceDiagram& out);
 
   // Every pointer ends at the root of its chain (a minimum, a maximum, or the outside).
   void jump(std::vector<std::uint32_t>& p);
@@ -198,6 +201,7 @@ class Engine {
   const float* f_;
   FreudenthalComplex cx_;
   Id V_;
+  std::size_t max_memory_;
   ProgressFn progress_;
   const std::vector<detail::LinkComponents>& table_;
   const freudenthal::Link& link_;
@@ -206,6 +210,7 @@ class Engine {
   std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
   std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
   Id minima_ = 0, maxima_ = 0;
+  std::size_t extra_lower_ = 0, extra_upper_ = 0;  // extra link components of join and split saddles
   std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
   std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
   std::vector<std::uint64_t> has_births_;    // a bit per vertex: in birth_list_ (most lookups are misses)

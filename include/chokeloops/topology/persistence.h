@@ -37,6 +37,7 @@ struct PersistencePair {
 struct PersistenceStats {
   double seconds_classify = 0, seconds_dim0 = 0, seconds_dim2 = 0, seconds_dim1 = 0, seconds_total = 0;
   Id join_saddles = 0, split_saddles = 0, minima = 0, maxima = 0;
+  std::size_t estimated_bytes = 0;  // the memory guard's estimate of the whole computation's peak
 };
 
 struct PersistenceDiagram {
@@ -51,7 +52,11 @@ struct PersistenceDiagram {
 using ProgressFn = std::function<bool(const char* stage, double fraction)>;
 
 // Computes the diagram of `grid` (validated first: non-finite values throw Error).
-PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress = {});
+// max_memory: the bytes it may use (0: 80% of physical memory). Once the field is classified, the counts of
+// critical points give what the pairs will need, which on a rough field is several times a smooth one's; over
+// the budget, Error with exit code 3 is thrown before anything large is allocated.
+PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress = {},
+                                          std::size_t max_memory = 0);
 
 // Writes "dim,birth,death" rows (GUDHI style, essential deaths as inf), header included.
 void write_pairs_csv(const PersistenceDiagram& diagram, const std::string& path);
