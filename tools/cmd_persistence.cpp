@@ -4,7 +4,7 @@
 #include <iostream>
 #include <memory>
 
-#include "chokeloops/field/levelset.h"
+#include "chokeloops/field/memory_budget.h"
 #include "chokeloops/grid.h"
 #include "chokeloops/topology/persistence.h"
 #include "chokeloops/io/vdb_io.h"

@@ -26,13 +26,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <string>
 
+#include "chokeloops/field/memory_budget.h"
 #include "persistence_engine.h"
 
 namespace chokeloops {
@@ -346,11 +345,7 @@ void Engine::finish(PersistenceDiagram& out, std::size_t end0, std::size_t end2)
 PersistenceDiagram lower_star_persistence(const ScalarGrid& grid, const ProgressFn& progress,
                                           std::size_t max_memory) {
   validate_grid(grid);
-  if (!max_memory) {
-    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    max_memory = pages > 0 && page > 0 ? std::size_t(pages) / 10 * 8 * std::size_t(page) : std::size_t(8) << 30;
-  }
-  detail::Engine engine(grid, progress, max_memory);
+  detail::Engine engine(grid, progress, max_memory ? max_memory : default_max_memory());
   return engine.run();
 }
 

@@ -100,7 +100,7 @@ bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::u
     if (x == info.lowest) continue;
     const BirthSlots* b = birth_slots(p.hi);
     if (b && (b->mask >> x & 1)) {
-      rank = birth_rank_in(*b, p.hi, p.lo);
+      rank = birth_rank_in(*b, p.lo);
       return true;
     }
   }

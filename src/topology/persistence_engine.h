@@ -159,12 +159,12 @@ class Engine {
   template <class Push>
   void expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& push);
 
-  // Rank of birth edge (s, x) among all dim-1 birth edges in filtration order: the saddles' order, then
-  // each saddle's lower ends in order.
-  std::uint32_t birth_rank_in(const BirthSlots& b, Id s, Id x) const {
+  // Rank of birth edge (b.saddle, x) among all dim-1 birth edges in filtration order: the saddles' order,
+  // then each saddle's lower ends in order.
+  std::uint32_t birth_rank_in(const BirthSlots& b, Id x) const {
     std::uint32_t r = b.base;
     for (unsigned m = b.mask; m; m &= m - 1)
-      if (less(s + delta_[__builtin_ctz(m)], x)) ++r;
+      if (less(Id(b.saddle) + delta_[__builtin_ctz(m)], x)) ++r;
     return r;
   }
 

@@ -7,6 +7,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include "chokeloops/field/memory_budget.h"
 #include "chokeloops/grid.h"
 #include "chokeloops/io/mesh_io.h"
 
@@ -78,9 +79,5 @@ double default_margin(double longest_side, double voxel_size);
 
 // Memory model used by the guard: bytes needed to build a dense grid of `box_voxels` vertices.
 std::size_t estimate_levelset_bytes(std::size_t box_voxels);
-std::size_t physical_memory_bytes();  // MemTotal from /proc/meminfo
-std::size_t default_max_memory();     // 80% of physical memory
-// Parses "8G", "512M", "1.5GiB", "1000000" (bytes); throws Error on nonsense.
-std::size_t parse_bytes(const std::string& text);
 
 }  // namespace chokeloops
