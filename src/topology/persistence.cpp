@@ -5,12 +5,13 @@
 // vertex whose lower link has several components (join saddle: dim-0 deaths, dim-1 births), whose
 // upper link has several components (split saddle: dim-2 births, dim-1 deaths), or at an extremum.
 // A 14-bit mask and a table of link components classify every vertex in one parallel pass.
-//  * dim 0: each vertex points to its lowest neighbour; pointer jumping gives every vertex its minimum.
-//    Join saddles, in filtration order, merge the minima of their lower-link components with the elder
-//    rule (union-find). The cross edge of a lower-link component is (s, lowest vertex of the component).
+//  * dim 0: each vertex keeps the link slot of its lowest neighbour (4 bits, no 32-bit pointer a vertex); the
+//    descents from the lobes of the join saddles, followed in parallel, give their minima. Join saddles, in
+//    filtration order, merge those minima with the elder rule (union-find over the minima). The cross edge
+//    of a lower-link component is (s, lowest vertex of the component).
 //  * dim 2: the same upside down on the dual graph (tetrahedra joined by triangles, the outside of the box
-//    one node that never dies): each vertex points up, maxima own the last tetrahedron of their star, and
-//    split saddles, in reverse order, replay their lower star's tetrahedra and triangles locally.
+//    one node that never dies): each vertex keeps its step up, maxima own the last tetrahedron of their
+//    star, and split saddles, in reverse order, replay their lower star's tetrahedra and triangles locally.
 //  * dim 1: the edges left by dim 0 and the triangles left by dim 2 are paired by reducing only the
 //    boundaries of those triangles; a pivot edge paired inside its own lower star is replaced by the rest
 //    of that pair's cone (a path in the lower link), negative edges are compressed away. That needs no
@@ -50,8 +51,6 @@ PersistenceDiagram Engine::run() {
   auto t0 = Clock::now();
   report("classify", 0);
   classify();
-  jump(desc_);
-  jump(asc_);
   guard_memory(out);
   out.stats.seconds_classify = seconds_since(t0);
   auto t = Clock::now();
@@ -60,8 +59,9 @@ PersistenceDiagram Engine::run() {
   dim0(out);
   // each pointer array and saddle list is read by its own dimension only
   out.stats.join_saddles = Id(joins_.size());
-  std::vector<std::uint32_t>().swap(desc_);
   std::vector<std::uint32_t>().swap(joins_);
+  std::vector<std::uint32_t>().swap(minima_list_);
+  minimum_index_ = {};
   const std::size_t end0 = out.pairs.size();
   out.stats.seconds_dim0 = seconds_since(t);
   t = Clock::now();
@@ -71,8 +71,10 @@ PersistenceDiagram Engine::run() {
   out.pairs.reserve(out.pairs.size() + std::size_t(maxima_) + births1_);
   dim2(out);
   out.stats.split_saddles = Id(splits_.size());
-  std::vector<std::uint32_t>().swap(asc_);
+  std::vector<std::uint8_t>().swap(codes_);
   std::vector<std::uint32_t>().swap(splits_);
+  std::vector<std::uint32_t>().swap(maxima_list_);
+  maximum_index_ = {};
   const std::size_t end2 = out.pairs.size();
   out.stats.seconds_dim2 = seconds_since(t);
   t = Clock::now();
@@ -88,10 +90,9 @@ PersistenceDiagram Engine::run() {
 }
 
 void Engine::classify() {
-  desc_.resize(V_);
-  asc_.resize(V_);
+  codes_.resize(std::size_t(V_));
   const int nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
-  struct Local { std::vector<std::uint32_t> joins, splits; Id minima = 0, maxima = 0; std::size_t extra_lower = 0, extra_upper = 0; };
+  struct Local { std::vector<std::uint32_t> joins, splits, minima, maxima; std::size_t extra_lower = 0, extra_upper = 0; };
   tbb::enumerable_thread_specific<Local> locals;
   tbb::parallel_for(tbb::blocked_range<int>(0, nz * ny), [&](const tbb::blocked_range<int>& r) {
     Local& L = locals.local();
@@ -101,22 +102,23 @@ void Engine::classify() {
         Id v = cx_.vertex(i, j, k);
         bool border = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
         std::uint16_t lower = 0, outside = 0;
-        Id lo = v, hi = v;
+        int lo = -1, hi = -1;
         for (int n = 0; n < 14; ++n) {
           if (border && !cx_.neighbor_inside({i, j, k}, n)) { outside |= std::uint16_t(1u << n); continue; }
           Id u = v + delta_[n];
           if (less(u, v)) {
             lower |= std::uint16_t(1u << n);
-            if (lo == v || less(u, lo)) lo = u;
-          } else if (hi == v || less(hi, u)) {
-            hi = u;
+            if (lo < 0 || less(u, v + delta_[lo])) lo = n;
+          } else if (hi < 0 || less(v + delta_[hi], u)) {
+            hi = n;
           }
         }
         std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
-        desc_[v] = std::uint32_t(lo);
-        asc_[v] = outside ? kOutside : std::uint32_t(hi);
-        if (lower == 0) ++L.minima;
-        if (upper == 0) ++L.maxima;
+        const std::uint8_t down = lo < 0 ? kStepNone : std::uint8_t(lo);
+        const std::uint8_t up = outside ? kStepOutside : hi < 0 ? kStepNone : std::uint8_t(hi);
+        codes_[std::size_t(v)] = std::uint8_t(down | up << 4);
+        if (lower == 0) L.minima.push_back(std::uint32_t(v));
+        if (upper == 0) L.maxima.push_back(std::uint32_t(v));
         if (table_[lower].count >= 2) {
           L.joins.push_back(std::uint32_t(v));
           L.extra_lower += table_[lower].count - 1u;
@@ -131,11 +133,17 @@ void Engine::classify() {
   for (auto& L : locals) {
     joins_.insert(joins_.end(), L.joins.begin(), L.joins.end());
     splits_.insert(splits_.end(), L.splits.begin(), L.splits.end());
-    minima_ += L.minima;
-    maxima_ += L.maxima;
+    minima_list_.insert(minima_list_.end(), L.minima.begin(), L.minima.end());
+    maxima_list_.insert(maxima_list_.end(), L.maxima.begin(), L.maxima.end());
     extra_lower_ += L.extra_lower;
     extra_upper_ += L.extra_upper;
   }
+  minima_ = Id(minima_list_.size());
+  maxima_ = Id(maxima_list_.size());
+  tbb::parallel_sort(minima_list_.begin(), minima_list_.end());
+  tbb::parallel_sort(maxima_list_.begin(), maxima_list_.end());
+  minimum_index_.build(minima_list_, V_);
+  maximum_index_.build(maxima_list_, V_);
   auto by_order = [this](std::uint32_t a, std::uint32_t b) { return less(a, b); };
   tbb::parallel_sort(joins_.begin(), joins_.end(), by_order);
   tbb::parallel_sort(splits_.begin(), splits_.end(), [&](std::uint32_t a, std::uint32_t b) { return less(b, a); });
@@ -147,16 +155,19 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   const std::size_t minima = std::size_t(std::max<Id>(minima_, 1));
   const std::size_t births1 = extra_lower_ > minima - 1 ? extra_lower_ - (minima - 1) : 0;
   const std::size_t pairs = minima - 1 + extra_upper_;
-  // The peak is that of dim 2 or of dim 1, from the arrays each holds (bytes per item): the field and the
-  // ascending pointers (4 + 4 a vertex), the split saddles and their cross triangles, the pairs so far, the
-  // dim-1 deaths (16), the birth slots of the join saddles (~18 with their hash entry); then the field, the
-  // whole diagram and per dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
-  const std::size_t birth_slots = joins_.size() * 18, pair = sizeof(PersistencePair);
-  const std::size_t dim2 = std::size_t(V_) * 8 + splits_.size() * 4 + extra_upper_ * sizeof(CrossTriangle) +
-                           (pairs - births1) * pair + births1 * 16 + birth_slots;
-  const std::size_t dim1 = std::size_t(V_) * 4 + pairs * pair + births1 * 36 + birth_slots;
-  const std::size_t classify = std::size_t(V_) * 12;  // the field and both pointer arrays, already held
-  const std::size_t need = std::max({classify, dim2, dim1}) + (std::size_t(32) << 20);
+  // The peak is that of dim 0, dim 2 or dim 1, from the arrays each holds (bytes per item): the field and the
+  // steps (4 + 1 a vertex), a bit a vertex for the saddles with births, the extrema's lists and their
+  // bucket indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far; in dim 2 the cross triangles and the dim-1 deaths (16), the
+  // birth slots of the join saddles (~18 with their hash entry); then the field, the whole diagram and per
+  // dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
+  const std::size_t V = std::size_t(V_), bits = V / 8, birth_slots = joins_.size() * 18;
+  const std::size_t pair = sizeof(PersistencePair), extrema = std::size_t(minima_ + maxima_) * 12;
+  const std::size_t classify = V * 5 + extrema + (joins_.size() + splits_.size()) * 4;
+  const std::size_t dim0 = classify + bits + std::size_t(minima_) * 4 + (minima - 1) * pair + birth_slots;
+  const std::size_t dim2 = V * 5 + bits + std::size_t(maxima_) * 8 + splits_.size() * 4 +
+                           extra_upper_ * sizeof(CrossTriangle) + (pairs - births1) * pair + births1 * 16 + birth_slots;
+  const std::size_t dim1 = V * 4 + bits + pairs * pair + births1 * 36 + birth_slots;
+  const std::size_t need = std::max({dim0, dim2, dim1}) + (std::size_t(32) << 20);
   out.stats.estimated_bytes = need;
   if (need <= max_memory_) return;
   auto mb = [](std::size_t b) { return std::to_string((b + (1u << 20) - 1) >> 20) + " MB"; };
@@ -167,60 +178,65 @@ void Engine::guard_memory(PersistenceDiagram& out) {
               3);
 }
 
-void Engine::jump(std::vector<std::uint32_t>& p) {
-  for (;;) {
-    std::atomic<bool> changed{false};
-    tbb::parallel_for(tbb::blocked_range<Id>(0, V_, 1 << 15), [&](const tbb::blocked_range<Id>& r) {
-      bool ch = false;
-      for (Id v = r.begin(); v != r.end(); ++v) {
-        std::uint32_t a = load(p[v]);
-        if (a == kOutside || a == v) continue;
-        std::uint32_t b = load(p[a]);
-        if (b != a) { store(p[v], b); ch = true; }
-      }
-      if (ch) changed = true;
-    });
-    if (!changed) break;
-  }
-}
-
 void Engine::dim0(PersistenceDiagram& out) {
-  for (std::uint32_t s : joins_) {
-    std::uint16_t lower, outside;
-    masks(s, lower, outside);
-    const auto& comps = table_[lower];
-    std::array<Id, 7> low{};
-    for (int c = 0; c < comps.count; ++c) {
-      Id best = -1;
-      for (unsigned m = comps.masks[c]; m; m &= m - 1) {
-        Id u = s + delta_[__builtin_ctz(m)];
-        if (best < 0 || less(u, best)) best = u;
+  global_min_ = Id(minima_list_.front());  // a box has at least one minimum
+  for (std::uint32_t m : minima_list_)
+    if (less(m, global_min_)) global_min_ = m;
+  std::vector<std::uint32_t> parent(minima_list_.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  // Per join saddle, its lobes (the lowest vertex of each lower-link component, in filtration order) and the
+  // minima their descents reach: found in parallel a block at a time, merged in filtration order.
+  struct Lobes { std::array<std::uint32_t, 7> low, root; int count; };
+  const std::size_t block = std::size_t(1) << 15;
+  std::vector<Lobes> lobes(std::min(block, joins_.size()));
+  for (std::size_t first = 0; first < joins_.size(); first += block) {
+    const std::size_t n = std::min(block, joins_.size() - first);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const Id s = joins_[first + i];
+        std::uint16_t lower, outside;
+        masks(s, lower, outside);
+        const auto& comps = table_[lower];
+        Lobes& L = lobes[i];
+        L.count = comps.count;
+        for (int c = 0; c < comps.count; ++c) {
+          Id best = -1;
+          for (unsigned m = comps.masks[c]; m; m &= m - 1) {
+            Id u = s + delta_[__builtin_ctz(m)];
+            if (best < 0 || less(u, best)) best = u;
+          }
+          L.low[c] = std::uint32_t(best);
+        }
+        std::sort(L.low.begin(), L.low.begin() + comps.count, [this](std::uint32_t a, std::uint32_t b) { return less(a, b); });
+        for (int c = 0; c < comps.count; ++c) L.root[c] = minimum_index_(root_down(L.low[c]));
       }
-      low[c] = best;
-    }
-    std::sort(low.begin(), low.begin() + comps.count, [this](Id a, Id b) { return less(a, b); });
-    BirthSlots births{s, 0, std::uint32_t(births1_)};
-    for (int c = 1; c < comps.count; ++c) {
-      std::uint32_t rs = find(desc_, desc_[low[0]]), r = find(desc_, desc_[low[c]]);
-      if (r == rs) {
-        births.mask |= std::uint16_t(1u << slot(s, low[c]));
-        ++births1_;
-        continue;
+    });
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t s = joins_[first + i];
+      const Lobes& L = lobes[i];
+      BirthSlots births{s, 0, std::uint32_t(births1_)};
+      for (int c = 1; c < L.count; ++c) {
+        std::uint32_t rs = find(parent, L.root[0]), r = find(parent, L.root[c]);
+        if (r == rs) {
+          births.mask |= std::uint16_t(1u << slot(s, L.low[c]));
+          ++births1_;
+          continue;
+        }
+        std::uint32_t young = less(minima_list_[r], minima_list_[rs]) ? rs : r, old = young == r ? rs : r;
+        parent[young] = old;
+        const Id young_vertex = minima_list_[young];
+        PersistencePair p;
+        p.dim = 0;
+        p.birth = f_[young_vertex];
+        p.death = f_[s];
+        p.birth_simplex = p.birth_vertex = young_vertex;
+        p.death_simplex = cx_.edge_id(s, L.low[c]);
+        p.death_vertex = s;
+        p.death_lobes = {L.low[0], L.low[c]};
+        out.pairs.push_back(p);
       }
-      std::uint32_t young = less(r, rs) ? rs : r, old = young == r ? rs : r;
-      desc_[young] = old;
-      Id edge = cx_.edge_id(s, low[c]);
-      PersistencePair p;
-      p.dim = 0;
-      p.birth = f_[young];
-      p.death = f_[s];
-      p.birth_simplex = p.birth_vertex = young;
-      p.death_simplex = edge;
-      p.death_vertex = s;
-      p.death_lobes = {low[0], low[c]};
-      out.pairs.push_back(p);
+      if (births.mask) birth_list_.push_back(births);
     }
-    if (births.mask) birth_list_.push_back(births);
   }
   index_birth_list();
 }
@@ -258,7 +274,9 @@ void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTria
   std::array<std::int64_t, 7> lobe{};
   for (int c = 0; c < ucomps.count; ++c) {
     for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
-    rep[c] = (ucomps.masks[c] & outside) ? kOutside : std::uint32_t(s + delta_[__builtin_ctz(ucomps.masks[c])]);
+    rep[c] = (ucomps.masks[c] & outside)
+                 ? kOutside
+                 : maximum_index_(root_up(s + delta_[__builtin_ctz(ucomps.masks[c])]));
     unsigned in_box = ucomps.masks[c] & ~outside;
     lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
   }
@@ -299,25 +317,28 @@ void Engine::dim2(PersistenceDiagram& out) {
     for (std::size_t i = c * chunk; i < std::min(splits_.size(), (c + 1) * chunk); ++i)
       split_saddle_cross_triangles(splits_[i], found[c]);
   });
+  std::vector<std::uint32_t> parent(maxima_list_.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   for (auto& list : found)
     for (const CrossTriangle& ct : list) {
-      std::uint32_t g1 = find(asc_, root_up(ct.rep1)), g2 = find(asc_, root_up(ct.rep2));
+      std::uint32_t g1 = find(parent, ct.rep1), g2 = find(parent, ct.rep2);
       Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
       if (g1 == g2) {
         deaths1_.push_back({cx_.triangle_id(s, a, b), {std::int32_t(ct.lobe1), std::int32_t(ct.lobe2)}});
         continue;
       }
-      bool g1_younger = g2 == kOutside || (g1 != kOutside && less(g1, g2));
+      bool g1_younger = g2 == kOutside || (g1 != kOutside && less(maxima_list_[g1], maxima_list_[g2]));
       std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
-      asc_[young] = old;
+      parent[young] = old;
+      const Id young_vertex = maxima_list_[young];
       PersistencePair p;
       p.dim = 2;
       p.birth = f_[s];
-      p.death = f_[young];
+      p.death = f_[young_vertex];
       p.birth_simplex = cx_.triangle_id(s, a, b);
       p.birth_vertex = s;
-      p.death_simplex = last_tet(young);
-      p.death_vertex = young;
+      p.death_simplex = last_tet(young_vertex);
+      p.death_vertex = young_vertex;
       p.birth_lobes = {ct.lobe1, ct.lobe2};
       out.pairs.push_back(p);
     }
@@ -326,9 +347,7 @@ void Engine::dim2(PersistenceDiagram& out) {
 }
 
 void Engine::finish(PersistenceDiagram& out, std::size_t end0, std::size_t end2) {
-  Id gmin = 0;
-  for (Id v = 1; v < V_; ++v)
-    if (less(v, gmin)) gmin = v;
+  const Id gmin = global_min_;
   PersistencePair e;
   e.dim = 0;
   e.birth = f_[gmin];

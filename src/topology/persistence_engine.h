@@ -1,6 +1,7 @@
 #pragma once
 // The lower-star persistence engine's state and steps, shared by persistence.cpp (classification, dims 0
 // and 2, the driver) and persistence_dim1.cpp (the dim-1 reduction). Internal: not installed.
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -16,8 +17,11 @@ constexpr std::uint32_t kOutside = 0xFFFFFFFFu;  // the outside of the box: +inf
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-inline std::uint32_t load(const std::uint32_t& x) { return __atomic_load_n(&x, __ATOMIC_RELAXED); }
-inline void store(std::uint32_t& x, std::uint32_t v) { __atomic_store_n(&x, v, __ATOMIC_RELAXED); }
+// A vertex's steepest-descent and steepest-ascent steps, a nibble each (low: down, high: up): the link slot of
+// its lowest (highest) neighbour, or one of these. One byte a vertex instead of two 32-bit pointers: the
+// chains are followed only from the saddles' lobes, and are short where saddles are many.
+constexpr std::uint8_t kStepNone = 15;     // a minimum (down) or a maximum (up)
+constexpr std::uint8_t kStepOutside = 14;  // up: the vertex touches the outside of the box
 
 // An edge with its vertices' values inline, so that ordering a heap of edges reads no field memory.
 struct EdgeKey {
@@ -96,14 +100,46 @@ class Engine {
   // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
   void guard_memory(PersistenceDiagram& out);
 
-  // Every pointer ends at the root of its chain (a minimum, a maximum, or the outside).
-  void jump(std::vector<std::uint32_t>& p);
-
-  std::uint32_t find(std::vector<std::uint32_t>& p, std::uint32_t x) const {
-    while (x != kOutside && p[x] != x) {
-      std::uint32_t up = p[x];
-      if (up != kOutside && p[up] != up) p[x] = p[up];
-      x = p[x];
+  // The minimum a steepest descent from v ends at; the maximum an ascent ends at, or kOutside.
+  std::uint32_t root_down(Id v) const {
+    for (std::uint8_t c; (c = codes_[std::size_t(v)] & 15) != kStepNone;) v += delta_[c];
+    return std::uint32_t(v);
+  }
+  std::uint32_t root_up(Id v) const {
+    for (std::uint8_t c;; v += delta_[c]) {
+      c = codes_[std::size_t(v)] >> 4;
+      if (c == kStepNone) return std::uint32_t(v);
+      if (c == kStepOutside) return kOutside;
+    }
+  }
+  // Index of an extremum in its sorted list (the union-find's node), through buckets of vertex ids sized so
+  // that a bucket holds about one extremum: two cache misses, where a binary search takes ~20 steps.
+  // kOutside stays kOutside.
+  struct ExtremumIndex {
+    const std::vector<std::uint32_t>* list = nullptr;
+    std::vector<std::uint32_t> start;
+    int shift = 0;
+    void build(const std::vector<std::uint32_t>& sorted, Id vertex_count) {
+      list = &sorted;
+      shift = 0;
+      while ((std::uint64_t(vertex_count) >> (shift + 1)) >= sorted.size() && shift < 31) ++shift;
+      start.assign(std::size_t(std::uint64_t(vertex_count) >> shift) + 2, 0);
+      for (std::uint32_t v : sorted) ++start[(v >> shift) + 1];
+      for (std::size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+    }
+    std::uint32_t operator()(std::uint32_t v) const {
+      if (v == kOutside) return kOutside;
+      const std::size_t b = v >> shift;
+      for (std::uint32_t i = start[b];; ++i)
+        if ((*list)[i] == v) return i;
+    }
+  };
+  // Union-find over extrema; a root's parent is itself, or kOutside for a set merged into the outside.
+  static std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+    while (x != kOutside && parent[x] != x) {
+      std::uint32_t up = parent[x];
+      if (up != kOutside && parent[up] != up) parent[x] = parent[up];
+      x = parent[x];
     }
     return x;
   }
@@ -128,7 +164,8 @@ class Engine {
   Id last_tet(Id m) const;
 
   // A triangle of a split saddle's lower star that joins two upper-link components: it either gives
-  // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = a vertex of each component.
+  // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = each component's maximum
+  // (its index in maxima_list_) or kOutside.
   // lobe = an in-box vertex of each component (-2 if the component lies wholly outside the box).
   struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; std::int64_t lobe1, lobe2; };
 
@@ -137,7 +174,6 @@ class Engine {
   void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const;
 
   void dim2(PersistenceDiagram& out);
-  std::uint32_t root_up(std::uint32_t w) const { return w == kOutside ? kOutside : asc_[w]; }
 
   LowerLinkInfo compute_lower_link(Id v) const;
   // A thread's cache of lower links, direct-mapped by a hash of the vertex: the columns are reduced in grid
@@ -208,8 +244,12 @@ class Engine {
   std::array<Id, 14> delta_{};
   std::array<std::int8_t, 27> slot_of_offset_{};
   std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
-  std::vector<std::uint32_t> desc_, asc_, joins_, splits_;
+  std::vector<std::uint8_t> codes_;  // steps down and up, freed after dim 2
+  std::vector<std::uint32_t> joins_, splits_;
+  std::vector<std::uint32_t> minima_list_, maxima_list_;  // sorted by vertex; freed after their dimension
+  ExtremumIndex minimum_index_, maximum_index_;
   Id minima_ = 0, maxima_ = 0;
+  Id global_min_ = 0;
   std::size_t extra_lower_ = 0, extra_upper_ = 0;  // extra link components of join and split saddles
   std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
   std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
