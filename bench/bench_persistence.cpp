@@ -14,9 +14,13 @@
 // included, as chokeloops' wall time here excludes making the field), peak RSS by wait4, median of
 // min(runs, 3). Its pairs are those of the cubical complex (V-construction), not Freudenthal's, so only the
 // times and the memory are compared.
+// --peer-ttk BIN runs TTK's DiscreteMorseSandwich (bench/peers/ttk_persistence.cpp, built from TTK's public
+// sources, bench/README.md) the same way on the field mirrored along x, where its triangulation is ours; up to
+// --peer-ttk-compare MAX_N (default 128) its diagram is also compared with chokeloops', pair for pair.
 //
 // usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random]
-//                          [--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN]
+//                          [--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN] [--peer-ttk BIN]
+//                          [--peer-ttk-compare MAX_N]
 #include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/wait.h>
@@ -210,6 +214,95 @@ Result measure_cubicalripser(const std::string& bin, const std::string& field, i
   return r;
 }
 
+// The field as raw float32, x fastest, mirrored along x (TTK's input: see measure_ttk).
+void write_raw_mirrored_x(const ScalarGrid& g, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  const std::size_t nx = std::size_t(g.dims[0]);
+  std::vector<float> row(nx);
+  for (std::size_t r = 0; r < g.values.size() / nx; ++r) {
+    for (std::size_t i = 0; i < nx; ++i) row[i] = g.values[r * nx + (nx - 1 - i)];
+    out.write(reinterpret_cast<const char*>(row.data()), std::streamsize(nx * sizeof(float)));
+  }
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+struct ValuePair {
+  int dim;
+  float birth, death;
+  bool operator<(const ValuePair& o) const {
+    return dim != o.dim ? dim < o.dim : birth != o.birth ? birth < o.birth : death < o.death;
+  }
+  bool operator==(const ValuePair& o) const { return dim == o.dim && birth == o.birth && death == o.death; }
+};
+
+// How many pairs of `a` and `b` (as multisets of (dim, birth, death)) have no match in the other.
+std::size_t unmatched_pairs(std::vector<ValuePair> a, std::vector<ValuePair> b) {
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  std::size_t i = 0, j = 0, unmatched = 0;
+  while (i < a.size() && j < b.size()) {
+    if (a[i] == b[j]) { ++i; ++j; }
+    else if (a[i] < b[j]) { ++i; ++unmatched; }
+    else { ++j; ++unmatched; }
+  }
+  return unmatched + (a.size() - i) + (b.size() - j);
+}
+
+// TTK's persistence diagram (DiscreteMorseSandwich, bench/peers/ttk_persistence.cpp) on the same field, in its
+// own process, as raw float32 mirrored along x: TTK splits each cube of the grid along its (1,0,0)-(0,1,1)
+// diagonal and chokeloops along (0,0,0)-(1,1,1), so TTK's triangulation of the mirrored field is chokeloops'
+// triangulation of the field, and the two diagrams must be the same pairs. Wall time from exec to exit (reading
+// the raw file included), peak RSS by wait4, median of min(runs, 3). With `compare`, one more run (untimed)
+// writes TTK's pairs, which are compared with chokeloops' on the unmirrored field; `verdict` says how they agree.
+Result measure_ttk(const std::string& bin, const std::string& field, int n, int runs, int threads, bool compare,
+                   std::string& verdict) {
+  Result r;
+  char dir[] = "/tmp/bench_persistence_XXXXXX";
+  if (!mkdtemp(dir)) { std::snprintf(r.error, sizeof r.error, "mkdtemp failed"); return r; }
+  const std::string raw = std::string(dir) + "/field.raw", csv = std::string(dir) + "/pairs.csv";
+  std::vector<ValuePair> ours;
+  {
+    ScalarGrid g = make_field(field, n);
+    write_raw_mirrored_x(g, raw);
+    if (compare) {
+      PersistenceDiagram d = lower_star_persistence(g);
+      for (auto& p : d.pairs) ours.push_back({p.dim, p.birth, p.death});
+    }
+  }
+  const std::string t = std::to_string(threads > 0 ? threads : tbb::info::default_concurrency()), ns = std::to_string(n);
+  std::vector<double> wall;
+  std::string error;
+  for (int i = 0; i < runs; ++i) {
+    double sec = 0, mb = 0;
+    if (!run_peer({bin, raw, ns, ns, ns, t}, sec, mb, error)) break;
+    wall.push_back(sec);
+    r.peak_rss_mb = std::max(r.peak_rss_mb, mb);
+  }
+  if (wall.size() == std::size_t(runs) && compare) {
+    double sec = 0, mb = 0;
+    if (run_peer({bin, raw, ns, ns, ns, t, csv}, sec, mb, error)) {
+      std::vector<ValuePair> theirs;
+      std::ifstream in(csv);
+      ValuePair v{};
+      char c1, c2;
+      while (in >> v.dim >> c1 >> v.birth >> c2 >> v.death) theirs.push_back(v);
+      const std::size_t bad = unmatched_pairs(ours, theirs);
+      verdict = bad == 0 ? "diagram identical to chokeloops' (" + std::to_string(ours.size()) + " pairs)"
+                         : "DIAGRAMS DIFFER: " + std::to_string(bad) + " unmatched pairs (" +
+                               std::to_string(ours.size()) + " ours, " + std::to_string(theirs.size()) + " TTK's)";
+      std::remove(csv.c_str());
+    }
+  }
+  std::remove(raw.c_str());
+  rmdir(dir);
+  if (!error.empty()) std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
+  else if (wall.size() == std::size_t(runs)) {
+    r.total = r.wall = median(wall);
+    r.ok = 1;
+  }
+  return r;
+}
+
 // Runs `measure` in a child process and returns its result through a pipe.
 Result measure_in_child(const std::string& field, int n, int runs, int threads, bool phat = false) {
   int fd[2];
@@ -271,7 +364,8 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
   chokeloops::restart_with_huge_pages(argv);
   int runs = 5, threads = 0, peer_max = 0;
-  std::string cubicalripser;
+  std::string cubicalripser, ttk;
+  int ttk_compare_max = 128;
   bool large = false;
   std::vector<int> sizes{128, 256};
   std::vector<std::string> fields{"torus", "noise", "random"};
@@ -288,6 +382,8 @@ int main(int argc, char** argv) {
     else if (a == "--large") large = true;
     else if (a == "--peer-phat") peer_max = std::atoi(value().c_str());
     else if (a == "--peer-cubicalripser") cubicalripser = value();
+    else if (a == "--peer-ttk") ttk = value();
+    else if (a == "--peer-ttk-compare") ttk_compare_max = std::atoi(value().c_str());
     else if (a == "--threads") threads = std::atoi(value().c_str());
     else if (a == "--sizes") {
       sizes.clear();
@@ -296,7 +392,8 @@ int main(int argc, char** argv) {
     else {
       std::fprintf(stderr,
                    "usage: bench_persistence [--runs R] [--large] [--sizes 128,256] [--fields torus,noise,random] "
-                   "[--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN]\n");
+                   "[--threads N] [--peer-phat MAX_N] [--peer-cubicalripser BIN] [--peer-ttk BIN] "
+                   "[--peer-ttk-compare MAX_N]\n");
       return a == "-h" || a == "--help" ? 0 : 2;
     }
   }
@@ -330,6 +427,22 @@ int main(int argc, char** argv) {
         } else {
           std::printf("| CubicalRipser (1 thread, cubical complex): %s | %d^3 | | | | | | %.3f (%.1fx chokeloops) | | | | | | %.0f (%.1fx) |\n",
                       field_label(f), n, c.wall, c.wall / r.wall, c.peak_rss_mb, c.peak_rss_mb / r.peak_rss_mb);
+        }
+        std::fflush(stdout);
+      }
+      if (!ttk.empty() && r.ok) {
+        std::string verdict;
+        Result c = measure_ttk(ttk, f, n, std::min(runs, 3), threads, n <= ttk_compare_max, verdict);
+        if (!c.ok) {
+          std::printf("| TTK DiscreteMorseSandwich | %d^3 | failed: %s |\n", n, c.error);
+          ++failures;
+        } else {
+          std::printf("| TTK DiscreteMorseSandwich (%s threads, field mirrored along x): %s | %d^3 | | | | | | %.3f (%.1fx "
+                      "chokeloops) | | | | | | %.0f (%.1fx) |\n",
+                      threads > 0 ? std::to_string(threads).c_str() : "default", field_label(f), n, c.wall,
+                      c.wall / r.wall, c.peak_rss_mb, c.peak_rss_mb / r.peak_rss_mb);
+          if (!verdict.empty()) std::printf("  %s\n", verdict.c_str());
+          if (verdict.rfind("DIAGRAMS DIFFER", 0) == 0) ++failures;
         }
         std::fflush(stdout);
       }
