@@ -6,11 +6,13 @@
 // Set CHOKELOOPS_ORACLE_FAILURES=/path/file to append every failing case (dims, values, diff) there.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 #include "analytic_fields.h"
 #include "chokeloops/topology/persistence.h"
@@ -251,3 +253,40 @@ TEST(OracleEdgeCases, ExtremeMagnitudes) {
 }
 
 }  // namespace
+
+// A second, independent oracle: TTK's DiscreteMorseSandwich (tests/fixtures/ttk/README.md). TTK ran on the
+// field mirrored along x, where its triangulation is ours, so the pairs must be equal as values, exactly.
+TEST(OracleTtk, RoughFieldEqualsTtkOnTheMirroredField) {
+  const std::string dir = std::string(CHOKELOOPS_SOURCE_DIR) + "/tests/fixtures/ttk/";
+  ScalarGrid g;
+  g.dims = {28, 24, 20};
+  g.values.resize(28 * 24 * 20);
+  std::ifstream field(dir + "rough_torus_28x24x20.f32", std::ios::binary);
+  field.read(reinterpret_cast<char*>(g.values.data()), std::streamsize(g.values.size() * sizeof(float)));
+  ASSERT_TRUE(field.good());
+  using Triple = std::tuple<int, float, float>;
+  std::vector<Triple> ttk;
+  std::ifstream csv(dir + "rough_torus_28x24x20.ttk_pairs.csv");
+  int dim;
+  float birth, death;
+  char c1, c2;
+  while (csv >> dim >> c1 >> birth >> c2 >> death) ttk.emplace_back(dim, birth, death);
+  ASSERT_EQ(ttk.size(), 560u);
+  auto diagram_of = [](const ScalarGrid& grid) {
+    std::vector<Triple> out;
+    for (auto& p : lower_star_persistence(grid).pairs) out.emplace_back(p.dim, p.birth, p.death);
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  std::sort(ttk.begin(), ttk.end());
+  const std::vector<Triple> ours = diagram_of(g);
+  EXPECT_EQ(std::count_if(ours.begin(), ours.end(), [](const Triple& t) { return std::get<0>(t) == 1; }), 466);
+  EXPECT_EQ(ours, ttk);
+  // The triangulation matters: on the field mirrored along x (TTK's input), chokeloops' diagram differs.
+  ScalarGrid mirrored = g;
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 28; ++i)
+        mirrored.values[std::size_t((k * 24 + j) * 28 + i)] = g.values[std::size_t((k * 24 + j) * 28 + 27 - i)];
+  EXPECT_NE(diagram_of(mirrored), ttk);
+}
