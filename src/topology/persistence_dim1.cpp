@@ -5,14 +5,24 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
 #include <memory>
 #include <queue>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "persistence_engine.h"
 
 namespace chokeloops::detail {
+
+// How many edges a death triangle's column may pop in the parallel pass when some columns run long (see dim1).
+constexpr std::size_t kColumnBudget = 16;
+constexpr std::size_t kSharedBudget = 256;
+// A column popping more than kLongColumn edges is long; a field with over 1% long columns among a sample of
+// every kSampleStride-th is reduced lazily.
+constexpr std::size_t kLongColumn = 128, kSampleStride = 64;
 
 LowerLinkInfo Engine::compute_lower_link(Id v) const {
   LowerLinkInfo info;
@@ -82,8 +92,10 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
 }
 
 template <class Heap>
-bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank) {
-  while (!heap.empty()) {
+bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank,
+                                std::size_t& budget) {
+  while (!heap.empty() && budget > 0) {
+    --budget;
     p = heap.top();
     heap.pop();
     bool odd = true;
@@ -105,14 +117,6 @@ bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::u
     }
   }
   return false;
-}
-
-template <class Heap>
-void Engine::drain_ranks(Heap& heap, LinkCache& links, std::uint32_t pivot, std::vector<std::uint32_t>& out) {
-  out.push_back(pivot);
-  EdgeKey q;
-  std::uint32_t r;
-  while (pop_to_birth_pivot(heap, links, q, r)) out.push_back(r);
 }
 
 EdgeKey Engine::birth_edge(std::uint32_t rank) const {
@@ -156,12 +160,17 @@ void Engine::dim1(PersistenceDiagram& out) {
     pr.death_lobes = {Id(deaths1_[i].lobes[0]), Id(deaths1_[i].lobes[1])};
   });
   std::vector<Death1>().swap(deaths1_);
-  auto heap_less = [this](const EdgeKey& a, const EdgeKey& b) { return edge_less(a, b); };
-  using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, decltype(heap_less)>;
+  struct EdgeLess {
+    bool operator()(const EdgeKey& a, const EdgeKey& b) const { return edge_less(a, b); }
+  };
+  using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, EdgeLess>;
   // In parallel: each death triangle's boundary reduced to birth edges alone (each edge paired inside its
   // own lower star is replaced by the rest of its pair's cone; negative edges are dropped), kept as the birth
-  // edges' ranks in descending order. The columns are then short and need no lower link again: the
-  // sequential pass below only adds sorted rank lists. This part is order-free, so it runs in grid order:
+  // edges' ranks in descending order; the sequential pass below then only merges sorted rank lists. On rough
+  // fields that is nearly every column. A column that needs more than kColumnBudget pops (smooth fields with
+  // sparse noise: the boundary runs far down) keeps only the ranks found so far and stays lazy: if its first
+  // rank is also another's, it is reduced further (kSharedBudget); otherwise the sequential pass reduces it,
+  // from its triangle, only as far as it must. This part is order-free, so it runs in grid order:
   // neighbouring triangles share lower links and field memory, which the filtration order scatters.
   std::vector<std::uint32_t> grid_order(n);
   for (std::size_t i = 0; i < n; ++i) grid_order[i] = std::uint32_t(i);
@@ -169,64 +178,174 @@ void Engine::dim1(PersistenceDiagram& out) {
     const Id va = out.pairs[base + a].death_vertex, vb = out.pairs[base + b].death_vertex;
     return va < vb || (va == vb && a < b);
   });
+  // Where a column's ranks are: chunk `chunk`'s list, or the pool; kLazy marks a column known only as far
+  // as its ranks go (its triangle gives the rest).
+  constexpr std::uint32_t kPool = 0xFFFFFFFFu, kLazy = 0x80000000u;
   struct Where { std::uint32_t chunk, begin, end; };
   std::vector<Where> where(n);
   const std::size_t chunk = 2048, nchunks = (n + chunk - 1) / chunk;
   std::vector<std::vector<std::uint32_t>> first(nchunks);
   tbb::enumerable_thread_specific<std::unique_ptr<LinkCache>> caches;
-  tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+  auto push_triangle = [&](Heap& heap, std::uint32_t i) {
+    const auto tau = cx_.triangle_vertices(out.pairs[base + i].death_simplex);  // make_edge orders each edge
+    heap.push(make_edge(tau[0], tau[1]));
+    heap.push(make_edge(tau[0], tau[2]));
+    heap.push(make_edge(tau[1], tau[2]));
+  };
+  // Reduces column i from its triangle, appending its ranks to `entries`, popping at most `budget` edges;
+  // true if it was reduced in full.
+  auto reduce_column = [&](Heap& heap, LinkCache& links, std::uint32_t i, std::size_t budget,
+                           std::vector<std::uint32_t>& entries) {
+    while (!heap.empty()) heap.pop();
+    push_triangle(heap, i);
+    EdgeKey p;
+    std::uint32_t r;
+    while (pop_to_birth_pivot(heap, links, p, r, budget)) entries.push_back(r);
+    return heap.empty();
+  };
+  std::atomic<std::size_t> lazy_columns{0};
+  auto in_parallel = [&](auto&& body) {
+    tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+      std::unique_ptr<LinkCache>& links = caches.local();
+      if (!links) links = std::make_unique<LinkCache>();
+      Heap heap;
+      for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) body(c, grid_order[k], heap, *links);
+      first[c].shrink_to_fit();
+    });
+  };
+  // Full reduction pays on rough fields, where a quarter of the columns get others added and nearly all are
+  // short; on smooth fields with sparse noise most columns are long (the boundary runs far down) and few are
+  // ever added to: there only the ranks the sequential pass asks for are found. A sample decides which.
+  std::atomic<std::size_t> sampled{0}, long_ones{0};
+  tbb::parallel_for(std::size_t(0), (n + kSampleStride - 1) / kSampleStride, [&](std::size_t k) {
     std::unique_ptr<LinkCache>& links = caches.local();
     if (!links) links = std::make_unique<LinkCache>();
-    Heap heap(heap_less);
-    std::vector<std::uint32_t>& entries = first[c];
-    for (std::size_t k = c * chunk; k < std::min(n, (c + 1) * chunk); ++k) {
-      const std::uint32_t i = grid_order[k];
-      const auto tau = cx_.triangle_vertices(out.pairs[base + i].death_simplex);  // make_edge orders each edge
-      heap.push(make_edge(tau[0], tau[1]));
-      heap.push(make_edge(tau[0], tau[2]));
-      heap.push(make_edge(tau[1], tau[2]));
-      where[i].chunk = std::uint32_t(c);
-      where[i].begin = std::uint32_t(entries.size());
-      EdgeKey p;
-      std::uint32_t r;
-      if (pop_to_birth_pivot(heap, *links, p, r)) drain_ranks(heap, *links, r, entries);
-      where[i].end = std::uint32_t(entries.size());
-    }
-    entries.shrink_to_fit();
+    Heap heap;
+    std::vector<std::uint32_t> ranks;
+    if (!reduce_column(heap, links.get()[0], grid_order[k * kSampleStride], kLongColumn, ranks)) ++long_ones;
+    ++sampled;
   });
+  const std::size_t budget = long_ones * 100 > sampled ? kColumnBudget : std::numeric_limits<std::size_t>::max();
+  in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
+    std::vector<std::uint32_t>& entries = first[c];
+    const std::size_t begin = entries.size();
+    const bool full = reduce_column(heap, links, i, budget, entries);
+    if (full && entries.size() == begin) throw InternalError("a dim-1 death triangle reduced to zero");
+    where[i] = {std::uint32_t(c) | (full ? 0 : kLazy), std::uint32_t(begin), std::uint32_t(entries.size())};
+    if (!full) ++lazy_columns;
+  });
+  if (lazy_columns > 0) {
+    std::vector<std::uint8_t> firsts(births1_, 0);  // how many columns start with each rank (0, 1, 2+)
+    for (std::size_t i = 0; i < n; ++i)
+      if (where[i].begin != where[i].end) {
+        std::uint8_t& f = firsts[first[where[i].chunk & ~kLazy][where[i].begin]];
+        if (f < 2) ++f;
+      }
+    in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
+      Where& w = where[i];
+      if (!(w.chunk & kLazy)) return;
+      std::vector<std::uint32_t>& entries = first[c];
+      if (w.begin != w.end && firsts[entries[w.begin]] < 2) return;
+      const std::size_t begin = entries.size();
+      const bool full = reduce_column(heap, links, i, kSharedBudget, entries);
+      if (full && entries.size() == begin) throw InternalError("a dim-1 death triangle reduced to zero");
+      w = {std::uint32_t(c) | (full ? 0 : kLazy), std::uint32_t(begin), std::uint32_t(entries.size())};
+      if (full) --lazy_columns;
+    });
+  }
   std::vector<std::uint32_t>().swap(grid_order);
-  std::vector<std::uint32_t>().swap(birth_table_);  // the ranks are known: no birth edge is looked up again
-  std::vector<std::uint64_t>().swap(has_births_);
+  out.stats.dim1_lazy_columns = Id(lazy_columns.load());
+  if (lazy_columns == 0) {  // every rank is known: no birth edge is looked up again
+    std::vector<std::uint32_t>().swap(birth_table_);
+    std::vector<std::uint64_t>().swap(has_births_);
+  }
   report("dim 1", 0.8);
   // In filtration order: a column whose pivot is owned adds the owner's column until its pivot is free.
-  // owner: per birth rank, the death whose column has it as pivot; columns that needed additions move to
-  // one pool (where[i].chunk = kPool).
-  constexpr std::uint32_t kPool = 0xFFFFFFFFu;
+  // owner: per birth rank, the death whose column has it as pivot. Columns that needed additions move to
+  // the pool (chunk kPool); one reduced on a heap keeps what is left below its pivot as raw edges.
   std::vector<std::uint32_t> owner(births1_, kOutside), pool, sum, scratch;
+  std::vector<std::array<std::uint32_t, 2>> edge_pool;
+  std::unordered_map<std::uint32_t, std::array<std::uint32_t, 2>> raw_edges;  // column -> its range in edge_pool
   auto column_of = [&](std::uint32_t i) {
     const Where& w = where[i];
-    const std::uint32_t* data = w.chunk == kPool ? pool.data() : first[w.chunk].data();
+    const std::uint32_t* data = w.chunk == kPool ? pool.data() : first[w.chunk & ~kLazy].data();
     return std::make_pair(data + w.begin, data + w.end);
   };
-  for (std::size_t i = 0; i < n; ++i) {
-    auto [begin, end] = column_of(std::uint32_t(i));
-    if (begin == end) throw InternalError("a dim-1 death triangle reduced to zero");
-    std::uint32_t r = *begin;
-    if (owner[r] != kOutside) {
+  auto is_ranks_only = [&](std::uint32_t i) {
+    return !(where[i].chunk != kPool && (where[i].chunk & kLazy)) && !raw_edges.count(i);
+  };
+  auto to_pool = [&](std::uint32_t i, const std::uint32_t* ranks, std::size_t count) {
+    if (pool.size() + count > kPool)
+      throw Error("the dim-1 reduction outgrew its 32-bit column pool; use a coarser resolution", 3);
+    where[i] = {kPool, std::uint32_t(pool.size()), std::uint32_t(pool.size() + count)};
+    pool.insert(pool.end(), ranks, ranks + count);
+  };
+  // The textbook reduction on a heap of edges, as far as the pivot only: while the pivot p is owned, the
+  // owner's column is added (its other ranks as birth edges and its raw edges; or, for a lazy owner, its
+  // triangle and p once more, which its reduction cancels); what is left below the free pivot stays raw.
+  LinkCache sequential_links;
+  Heap heap;
+  auto reduce_on_heap = [&](std::uint32_t i) {
+    EdgeKey p;
+    std::uint32_t r;
+    for (;;) {
+      std::size_t unlimited = std::numeric_limits<std::size_t>::max();
+      if (!pop_to_birth_pivot(heap, sequential_links, p, r, unlimited))
+        throw InternalError("a dim-1 death triangle reduced to zero");
+      const std::uint32_t o = owner[r];
+      if (o == kOutside) break;
+      if (where[o].chunk != kPool && (where[o].chunk & kLazy)) {
+        heap.push(p);
+        push_triangle(heap, o);
+        continue;
+      }
+      auto [ob, oe] = column_of(o);  // *ob == r cancels the pivot just popped
+      for (++ob; ob != oe; ++ob) heap.push(birth_edge(*ob));
+      auto raw = raw_edges.find(o);
+      if (raw != raw_edges.end())
+        for (std::uint32_t e = raw->second[0]; e < raw->second[1]; ++e)
+          heap.push(make_edge(edge_pool[e][0], edge_pool[e][1]));
+    }
+    to_pool(i, &r, 1);
+    const std::uint32_t edges_begin = std::uint32_t(edge_pool.size());
+    while (!heap.empty()) {
+      const EdgeKey e = heap.top();
+      heap.pop();
+      if (!heap.empty() && heap.top() == e) { heap.pop(); continue; }
+      edge_pool.push_back({e.hi, e.lo});
+    }
+    if (edge_pool.size() > kPool) throw Error("the dim-1 reduction outgrew its 32-bit edge pool; use a coarser resolution", 3);
+    if (edge_pool.size() > edges_begin) raw_edges[i] = {edges_begin, std::uint32_t(edge_pool.size())};
+    return r;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = std::uint32_t(k);
+    auto [begin, end] = column_of(i);
+    const bool lazy = where[i].chunk & kLazy;
+    std::uint32_t r = begin != end ? *begin : kOutside;
+    if (r != kOutside && owner[r] == kOutside) {
+      // its pivot is free: nothing to add, whatever is known of the rest
+    } else if (lazy) {
+      push_triangle(heap, i);
+      r = reduce_on_heap(i);
+    } else {
+      // ranks only: adding columns merges sorted rank lists while the owners are ranks only too
       sum.assign(begin, end);
-      do {
+      while (owner[r] != kOutside && is_ranks_only(owner[r])) {
         auto [obegin, oend] = column_of(owner[r]);
         add_columns(sum.data(), sum.data() + sum.size(), obegin, oend, scratch);
         sum.swap(scratch);
         if (sum.empty()) throw InternalError("a dim-1 death triangle reduced to zero");
         r = sum.front();
-      } while (owner[r] != kOutside);
-      if (pool.size() + sum.size() > kPool)
-        throw Error("the dim-1 reduction outgrew its 32-bit column pool; use a coarser resolution", 3);
-      where[i] = {kPool, std::uint32_t(pool.size()), std::uint32_t(pool.size() + sum.size())};
-      pool.insert(pool.end(), sum.begin(), sum.end());
+      }
+      if (owner[r] != kOutside) {
+        for (std::uint32_t q : sum) heap.push(birth_edge(q));
+        r = reduce_on_heap(i);
+      } else {
+        to_pool(i, sum.data(), sum.size());
+      }
     }
-    owner[r] = std::uint32_t(i);
+    owner[r] = i;
     const EdgeKey p = birth_edge(r);
     PersistencePair& pr = out.pairs[base + i];
     pr.birth = f_[p.hi];

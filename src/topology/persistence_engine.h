@@ -208,12 +208,9 @@ class Engine {
   // paired inside its own lower star is replaced by the rest of that pair's cone (this adds a boundary, so
   // the pivot is the one the full boundary matrix gives); a negative edge is dropped (compression).
   // rank: the birth edge's rank.
+  // budget: how many more edges may be popped; at 0 it returns false with the heap as it is.
   template <class Heap>
-  bool pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank);
-  // Appends the ranks of the pivot and of the chain's other birth edges, descending: the chain reduced
-  // inside the lower stars and compressed, so that only birth edges are left.
-  template <class Heap>
-  void drain_ranks(Heap& heap, LinkCache& links, std::uint32_t pivot, std::vector<std::uint32_t>& out);
+  bool pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::uint32_t& rank, std::size_t& budget);
   // The birth edge of a rank (birth_rank_in's inverse).
   EdgeKey birth_edge(std::uint32_t rank) const;
   // The link slot of v's lowest lower neighbour.

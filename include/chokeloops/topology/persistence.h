@@ -38,6 +38,9 @@ struct PersistenceStats {
   double seconds_classify = 0, seconds_dim0 = 0, seconds_dim2 = 0, seconds_dim1 = 0, seconds_total = 0;
   Id join_saddles = 0, split_saddles = 0, minima = 0, maxima = 0;
   std::size_t estimated_bytes = 0;  // the memory guard's estimate of the whole computation's peak
+  // dim-1 columns that the parallel pass left partly reduced (smooth fields with sparse noise: long columns,
+  // few additions; see persistence_dim1.cpp), 0 where every column was reduced in full (rough fields)
+  Id dim1_lazy_columns = 0;
 };
 
 struct PersistenceDiagram {
