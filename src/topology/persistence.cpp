@@ -188,6 +188,7 @@ void Engine::dim0(PersistenceDiagram& out) {
   // minima their descents reach: found in parallel a block at a time, merged in filtration order.
   struct Lobes { std::array<std::uint32_t, 7> low, root; int count; };
   const std::size_t block = std::size_t(1) << 15;
+  tbb::enumerable_thread_specific<RootCache> caches;
   std::vector<Lobes> lobes(std::min(block, joins_.size()));
   for (std::size_t first = 0; first < joins_.size(); first += block) {
     const std::size_t n = std::min(block, joins_.size() - first);
@@ -208,7 +209,8 @@ void Engine::dim0(PersistenceDiagram& out) {
           L.low[c] = std::uint32_t(best);
         }
         std::sort(L.low.begin(), L.low.begin() + comps.count, [this](std::uint32_t a, std::uint32_t b) { return less(a, b); });
-        for (int c = 0; c < comps.count; ++c) L.root[c] = minimum_index_(root_down(L.low[c]));
+        RootCache& roots = caches.local();
+        for (int c = 0; c < comps.count; ++c) L.root[c] = minimum_index_(walk<true>(L.low[c], roots));
       }
     });
     for (std::size_t i = 0; i < n; ++i) {
@@ -263,7 +265,7 @@ Id Engine::last_tet(Id m) const {
   return cx_.tet_id(m, best[0], best[1], best[2]);
 }
 
-void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const {
+void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out, RootCache& roots) const {
   std::uint16_t lower, outside;
   masks(s, lower, outside);
   std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
@@ -276,7 +278,7 @@ void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTria
     for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
     rep[c] = (ucomps.masks[c] & outside)
                  ? kOutside
-                 : maximum_index_(root_up(s + delta_[__builtin_ctz(ucomps.masks[c])]));
+                 : maximum_index_(walk<false>(s + delta_[__builtin_ctz(ucomps.masks[c])], roots));
     unsigned in_box = ucomps.masks[c] & ~outside;
     lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
   }
@@ -313,9 +315,11 @@ void Engine::dim2(PersistenceDiagram& out) {
   // Cross triangles of all split saddles, computed in parallel, kept in saddle order.
   const std::size_t chunk = 4096, nchunks = (splits_.size() + chunk - 1) / chunk;
   std::vector<std::vector<CrossTriangle>> found(nchunks);
+  tbb::enumerable_thread_specific<RootCache> caches;
   tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
+    RootCache& roots = caches.local();
     for (std::size_t i = c * chunk; i < std::min(splits_.size(), (c + 1) * chunk); ++i)
-      split_saddle_cross_triangles(splits_[i], found[c]);
+      split_saddle_cross_triangles(splits_[i], found[c], roots);
   });
   std::vector<std::uint32_t> parent(maxima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;

@@ -100,17 +100,36 @@ class Engine {
   // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
   void guard_memory(PersistenceDiagram& out);
 
-  // The minimum a steepest descent from v ends at; the maximum an ascent ends at, or kOutside.
-  std::uint32_t root_down(Id v) const {
-    for (std::uint8_t c; (c = codes_[std::size_t(v)] & 15) != kStepNone;) v += delta_[c];
-    return std::uint32_t(v);
-  }
-  std::uint32_t root_up(Id v) const {
-    for (std::uint8_t c;; v += delta_[c]) {
-      c = codes_[std::size_t(v)] >> 4;
-      if (c == kStepNone) return std::uint32_t(v);
-      if (c == kStepOutside) return kOutside;
+  // A thread's memory of where descents (or ascents) ended, direct-mapped by vertex: on a smooth field the
+  // walks from many saddles run down the same long paths, and a vertex seen before ends a walk early.
+  struct RootCache {
+    static constexpr int kBits = 14;
+    std::vector<std::uint32_t> key = std::vector<std::uint32_t>(std::size_t(1) << kBits, kOutside);
+    std::vector<std::uint32_t> root = std::vector<std::uint32_t>(std::size_t(1) << kBits);
+    static std::size_t slot(std::uint32_t v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
+  };
+  // The minimum a steepest descent from v ends at (kDown), or the maximum an ascent ends at, or kOutside.
+  // Every fourth vertex of the walk's last 128 steps is remembered with the answer.
+  template <bool kDown>
+  std::uint32_t walk(Id v, RootCache& cache) const {
+    std::array<std::uint32_t, 32> seen;
+    unsigned n = 0;
+    std::uint32_t r;
+    for (unsigned step = 0;; ++step) {
+      const std::size_t h = RootCache::slot(std::uint32_t(v));
+      if (cache.key[h] == std::uint32_t(v)) { r = cache.root[h]; break; }
+      const std::uint8_t c = kDown ? codes_[std::size_t(v)] & 15 : codes_[std::size_t(v)] >> 4;
+      if (c == kStepNone) { r = std::uint32_t(v); break; }
+      if (!kDown && c == kStepOutside) { r = kOutside; break; }
+      if ((step & 3) == 0) seen[n++ & 31] = std::uint32_t(v);
+      v += delta_[c];
     }
+    for (unsigned k = 0; k < std::min(n, 32u); ++k) {
+      const std::size_t h = RootCache::slot(seen[k]);
+      cache.key[h] = seen[k];
+      cache.root[h] = r;
+    }
+    return r;
   }
   // Index of an extremum in its sorted list (the union-find's node), through buckets of vertex ids sized so
   // that a bucket holds about one extremum: two cache misses, where a binary search takes ~20 steps.
@@ -171,7 +190,7 @@ class Engine {
 
   // Replays the lower star of split saddle s on the dual graph, in reverse filtration order, with each
   // upper-link component as one old node; needs no global state, so all saddles run in parallel.
-  void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out) const;
+  void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out, RootCache& roots) const;
 
   void dim2(PersistenceDiagram& out);
 
