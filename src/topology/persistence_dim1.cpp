@@ -194,13 +194,17 @@ void Engine::dim1(PersistenceDiagram& out) {
   };
   // Reduces column i from its triangle, appending its ranks to `entries`, popping at most `budget` edges;
   // true if it was reduced in full.
+  // With `first_only`, it stops at the first rank (the pivot) as well.
   auto reduce_column = [&](Heap& heap, LinkCache& links, std::uint32_t i, std::size_t budget,
-                           std::vector<std::uint32_t>& entries) {
+                           std::vector<std::uint32_t>& entries, bool first_only = false) {
     while (!heap.empty()) heap.pop();
     push_triangle(heap, i);
     EdgeKey p;
     std::uint32_t r;
-    while (pop_to_birth_pivot(heap, links, p, r, budget)) entries.push_back(r);
+    while (pop_to_birth_pivot(heap, links, p, r, budget)) {
+      entries.push_back(r);
+      if (first_only) break;
+    }
     return heap.empty();
   };
   std::atomic<std::size_t> lazy_columns{0};
@@ -222,14 +226,15 @@ void Engine::dim1(PersistenceDiagram& out) {
     if (!links) links = std::make_unique<LinkCache>();
     Heap heap;
     std::vector<std::uint32_t> ranks;
-    if (!reduce_column(heap, links.get()[0], grid_order[k * kSampleStride], kLongColumn, ranks)) ++long_ones;
+    if (!reduce_column(heap, *links, grid_order[k * kSampleStride], kLongColumn, ranks)) ++long_ones;
     ++sampled;
   });
-  const std::size_t budget = long_ones * 100 > sampled ? kColumnBudget : std::numeric_limits<std::size_t>::max();
+  const bool lazy_pass = long_ones * 100 > sampled;
+  const std::size_t budget = lazy_pass ? kColumnBudget : std::numeric_limits<std::size_t>::max();
   in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
     std::vector<std::uint32_t>& entries = first[c];
     const std::size_t begin = entries.size();
-    const bool full = reduce_column(heap, links, i, budget, entries);
+    const bool full = reduce_column(heap, links, i, budget, entries, lazy_pass);
     if (full && entries.size() == begin) throw InternalError("a dim-1 death triangle reduced to zero");
     where[i] = {std::uint32_t(c) | (full ? 0 : kLazy), std::uint32_t(begin), std::uint32_t(entries.size())};
     if (!full) ++lazy_columns;
