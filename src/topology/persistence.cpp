@@ -28,7 +28,6 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <string>
 
@@ -156,10 +155,10 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   const std::size_t births1 = extra_lower_ > minima - 1 ? extra_lower_ - (minima - 1) : 0;
   const std::size_t pairs = minima - 1 + extra_upper_;
   // The peak is that of dim 0, dim 2 or dim 1, from the arrays each holds (bytes per item): the field and the
-  // steps (4 + 1 a vertex), a bit a vertex for the saddles with births, the extrema's lists and their
-  // bucket indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far; in dim 2 the cross triangles and the dim-1 deaths (16), the
-  // birth slots of the join saddles (~18 with their hash entry); then the field, the whole diagram and per
-  // dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
+  // steps (4 + 1 a vertex), a bit a vertex for the saddles with births, the extrema's lists and their bucket
+  // indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far; in dim 2 the cross triangles and
+  // the dim-1 deaths (16), the birth slots of the join saddles (~18 with their hash entry); then the field,
+  // the whole diagram and per dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
   const std::size_t V = std::size_t(V_), bits = V / 8, birth_slots = joins_.size() * 18;
   const std::size_t pair = sizeof(PersistencePair), extrema = std::size_t(minima_ + maxima_) * 12;
   const std::size_t classify = V * 5 + extrema + (joins_.size() + splits_.size()) * 4;

@@ -276,9 +276,8 @@ void Engine::dim1(PersistenceDiagram& out) {
     const std::uint32_t* data = w.chunk == kPool ? pool.data() : first[w.chunk & ~kLazy].data();
     return std::make_pair(data + w.begin, data + w.end);
   };
-  auto is_ranks_only = [&](std::uint32_t i) {
-    return !(where[i].chunk != kPool && (where[i].chunk & kLazy)) && !raw_edges.count(i);
-  };
+  auto is_lazy = [&](std::uint32_t i) { return where[i].chunk != kPool && (where[i].chunk & kLazy); };
+  auto is_ranks_only = [&](std::uint32_t i) { return !is_lazy(i) && !raw_edges.count(i); };
   auto to_pool = [&](std::uint32_t i, const std::uint32_t* ranks, std::size_t count) {
     if (pool.size() + count > kPool)
       throw Error("the dim-1 reduction outgrew its 32-bit column pool; use a coarser resolution", 3);
@@ -299,7 +298,7 @@ void Engine::dim1(PersistenceDiagram& out) {
         throw InternalError("a dim-1 death triangle reduced to zero");
       const std::uint32_t o = owner[r];
       if (o == kOutside) break;
-      if (where[o].chunk != kPool && (where[o].chunk & kLazy)) {
+      if (is_lazy(o)) {
         heap.push(p);
         push_triangle(heap, o);
         continue;
@@ -326,11 +325,10 @@ void Engine::dim1(PersistenceDiagram& out) {
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint32_t i = std::uint32_t(k);
     auto [begin, end] = column_of(i);
-    const bool lazy = where[i].chunk & kLazy;
     std::uint32_t r = begin != end ? *begin : kOutside;
     if (r != kOutside && owner[r] == kOutside) {
       // its pivot is free: nothing to add, whatever is known of the rest
-    } else if (lazy) {
+    } else if (is_lazy(i)) {
       push_triangle(heap, i);
       r = reduce_on_heap(i);
     } else {
