@@ -184,6 +184,21 @@ bool run_peer(const std::vector<std::string>& argv, double& seconds, double& pea
   return true;
 }
 
+// Runs a peer's argv `runs` times: r's wall time (median) and peak RSS (largest), r.ok; false with `error`
+// set at the first failing run.
+bool time_peer(const std::vector<std::string>& argv, int runs, Result& r, std::string& error) {
+  std::vector<double> wall;
+  for (int i = 0; i < runs; ++i) {
+    double sec = 0, mb = 0;
+    if (!run_peer(argv, sec, mb, error)) return false;
+    wall.push_back(sec);
+    r.peak_rss_mb = std::max(r.peak_rss_mb, mb);
+  }
+  r.total = r.wall = median(wall);
+  r.ok = 1;
+  return true;
+}
+
 // CubicalRipser on the same field: dims 0-2, no output file, median wall time of `runs`.
 Result measure_cubicalripser(const std::string& bin, const std::string& field, int n, int runs) {
   Result r;
@@ -194,23 +209,11 @@ Result measure_cubicalripser(const std::string& bin, const std::string& field, i
     ScalarGrid g = make_field(field, n);
     write_npy(g, npy);
   }
-  std::vector<double> wall;
-  for (int i = 0; i < runs; ++i) {
-    double sec = 0, mb = 0;
-    std::string error;
-    if (!run_peer({bin, "--maxdim", "2", "--output", "none", npy}, sec, mb, error)) {
-      std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
-      break;
-    }
-    wall.push_back(sec);
-    r.peak_rss_mb = std::max(r.peak_rss_mb, mb);
-  }
+  std::string error;
+  if (!time_peer({bin, "--maxdim", "2", "--output", "none", npy}, runs, r, error))
+    std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
   std::remove(npy.c_str());
   rmdir(dir);
-  if (wall.size() == std::size_t(runs)) {
-    r.total = r.wall = median(wall);
-    r.ok = 1;
-  }
   return r;
 }
 
@@ -270,15 +273,8 @@ Result measure_ttk(const std::string& bin, const std::string& field, int n, int 
     }
   }
   const std::string t = std::to_string(threads > 0 ? threads : tbb::info::default_concurrency()), ns = std::to_string(n);
-  std::vector<double> wall;
   std::string error;
-  for (int i = 0; i < runs; ++i) {
-    double sec = 0, mb = 0;
-    if (!run_peer({bin, raw, ns, ns, ns, t}, sec, mb, error)) break;
-    wall.push_back(sec);
-    r.peak_rss_mb = std::max(r.peak_rss_mb, mb);
-  }
-  if (wall.size() == std::size_t(runs) && compare) {
+  if (time_peer({bin, raw, ns, ns, ns, t}, runs, r, error) && compare) {
     double sec = 0, mb = 0;
     if (run_peer({bin, raw, ns, ns, ns, t, csv}, sec, mb, error)) {
       std::vector<ValuePair> theirs;
@@ -295,10 +291,9 @@ Result measure_ttk(const std::string& bin, const std::string& field, int n, int 
   }
   std::remove(raw.c_str());
   rmdir(dir);
-  if (!error.empty()) std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
-  else if (wall.size() == std::size_t(runs)) {
-    r.total = r.wall = median(wall);
-    r.ok = 1;
+  if (!error.empty()) {
+    r.ok = 0;
+    std::snprintf(r.error, sizeof r.error, "%s", error.c_str());
   }
   return r;
 }
