@@ -110,28 +110,33 @@ SideLabels label_sides(const ScalarGrid& grid) {
   return out;
 }
 
-GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
-                         const SideChanges& changes, const SideLabels& before, const SideLabels& after) {
-  GroupVerdict verdict;
+namespace {
+
+// What judging a group needs from its surroundings: the vertices of each side around it, before and after the
+// batch, and its local change of the Euler characteristic.
+struct Surroundings {
+  std::vector<Id> vertices[2][2];  // [before/after][inside/outside]: the group's vertices and their neighbours
+  bool on_border = false;
+  int euler_change = 0;
+};
+
+Surroundings look_around(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
+                         const SideChanges& changes) {
+  Surroundings s;
   auto inside_after = [&](Id u) { return grid.values[std::size_t(u)] <= 0; };
   auto inside_before = [&](Id u) {
     const auto it = changes.find(u);
     return it != changes.end() ? it->second : inside_after(u);
   };
-  // The labels each side shows around the group, before and after; one per side each time keeps b0, b2.
-  std::vector<std::int32_t> seen[2][2];  // [before/after][inside/outside]
-  auto see = [&](std::vector<std::int32_t>& ids, std::int32_t id) {
-    if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
-  };
   const auto& link = freudenthal::vertex_link();
   for (Id v : group) {
     const auto c = cx.coords(v);
-    verdict.on_border = verdict.on_border || !cx.inside(c[0] - 1, c[1] - 1, c[2] - 1) || !cx.inside(c[0] + 1, c[1] + 1, c[2] + 1);
+    s.on_border = s.on_border || !cx.inside(c[0] - 1, c[1] - 1, c[2] - 1) || !cx.inside(c[0] + 1, c[1] + 1, c[2] + 1);
     std::array<Id, 14> nb;
     for (int k = 0; k < 14; ++k) nb[std::size_t(k)] = cx.neighbor_inside(c, k) ? v + cx.neighbor_delta(k) : -1;
     auto look = [&](Id u) {
-      see(seen[0][inside_before(u) ? 0 : 1], before.label[std::size_t(u)]);
-      see(seen[1][inside_after(u) ? 0 : 1], after.label[std::size_t(u)]);
+      s.vertices[0][inside_before(u) ? 0 : 1].push_back(u);
+      s.vertices[1][inside_after(u) ? 0 : 1].push_back(u);
     };
     look(v);
     for (Id u : nb)
@@ -144,21 +149,156 @@ GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, c
       for (Id u : vs) b = b && inside_before(u), a = a && inside_after(u);
       return int(a) - int(b);
     };
-    verdict.euler_change += change({v});
+    s.euler_change += change({v});
     for (Id u : nb)
-      if (here(u)) verdict.euler_change -= change({v, u});
+      if (here(u)) s.euler_change -= change({v, u});
     for (const auto& e : link.edges) {
       const Id a = nb[std::size_t(e[0])], b = nb[std::size_t(e[1])];
-      if (here(a) && here(b)) verdict.euler_change += change({v, a, b});
+      if (here(a) && here(b)) s.euler_change += change({v, a, b});
     }
     for (const auto& t : link.triangles) {
       const Id a = nb[std::size_t(t[0])], b = nb[std::size_t(t[1])], c3 = nb[std::size_t(t[2])];
-      if (here(a) && here(b) && here(c3)) verdict.euler_change -= change({v, a, b, c3});
+      if (here(a) && here(b) && here(c3)) s.euler_change -= change({v, a, b, c3});
     }
   }
-  verdict.keeps_components = seen[0][0].size() == 1 && seen[1][0].size() == 1;
-  verdict.keeps_cavities = seen[0][1].size() == 1 && seen[1][1].size() == 1;
+  for (auto& when : s.vertices)
+    for (auto& side : when) {
+      std::sort(side.begin(), side.end());
+      side.erase(std::unique(side.begin(), side.end()), side.end());
+    }
+  return s;
+}
+
+// Whether `targets` (non-empty, all of one side: `same_side` true on them) are joined by Freudenthal edges
+// through vertices of their side, searched within the box of the targets grown by `margin` voxels: Yes when the
+// search from the first target reaches them all; No when a search (from the first, or from a target it missed)
+// goes round its whole component without leaving the box and without the others (a split); else Unknown.
+enum class Joined { Yes, No, Unknown };
+template <class SameSide>
+Joined joined_in_box(const FreudenthalComplex& cx, const std::vector<Id>& targets, SameSide same_side, int margin) {
+  const auto& d = cx.dims();
+  std::array<int, 3> lo{d[0], d[1], d[2]}, hi{-1, -1, -1};
+  for (Id v : targets) {
+    const auto c = cx.coords(v);
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+  }
+  std::array<int, 3> size;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(0, lo[a] - margin), hi[a] = std::min(d[a] - 1, hi[a] + margin);
+    size[a] = hi[a] - lo[a] + 1;
+  }
+  auto local = [&](const std::array<int, 3>& c) {
+    return (std::size_t(c[2] - lo[2]) * std::size_t(size[1]) + std::size_t(c[1] - lo[1])) * std::size_t(size[0]) +
+           std::size_t(c[0] - lo[0]);
+  };
+  enum : char { kUnseen = 0, kTarget = 1, kFirst = 2, kSecond = 3 };
+  std::vector<char> state(std::size_t(size[0]) * std::size_t(size[1]) * std::size_t(size[2]), kUnseen);
+  for (Id v : targets) state[local(cx.coords(v))] = kTarget;
+  // One search, marking what it reaches `mark`; how many targets it reached, whether it met a vertex marked
+  // `meets` and whether it was stopped by the box.
+  struct Reach {
+    std::size_t targets = 0;
+    bool met = false, clipped = false;
+  };
+  std::vector<Id> queue;
+  auto search = [&](Id from, char mark, char meets) {
+    Reach r;
+    queue.assign(1, from);
+    state[local(cx.coords(from))] = mark;
+    r.targets = 1;
+    for (std::size_t q = 0; q < queue.size() && r.targets < targets.size(); ++q) {
+      const Id v = queue[q];
+      const auto c = cx.coords(v);
+      for (int k = 0; k < 14; ++k) {
+        const auto o = freudenthal::neighbor_offset(k);
+        const std::array<int, 3> n{c[0] + o[0], c[1] + o[1], c[2] + o[2]};
+        const bool in_grid = n[0] >= 0 && n[1] >= 0 && n[2] >= 0 && n[0] < d[0] && n[1] < d[1] && n[2] < d[2];
+        if (!in_grid) continue;
+        const Id u = v + cx.neighbor_delta(k);
+        if (n[0] < lo[0] || n[1] < lo[1] || n[2] < lo[2] || n[0] > hi[0] || n[1] > hi[1] || n[2] > hi[2]) {
+          r.clipped = r.clipped || same_side(u);
+          continue;
+        }
+        char& st = state[local(n)];
+        if (st == mark) continue;
+        if (st == meets && meets != kUnseen) {
+          r.met = true;
+          continue;
+        }
+        if (!same_side(u)) continue;
+        if (st == kTarget) ++r.targets;
+        st = mark;
+        queue.push_back(u);
+      }
+    }
+    return r;
+  };
+  const Reach first = search(targets.front(), kFirst, kUnseen);
+  if (first.targets == targets.size()) return Joined::Yes;
+  if (!first.clipped) return Joined::No;
+  for (Id t : targets)
+    if (state[local(cx.coords(t))] == kTarget) {
+      const Reach other = search(t, kSecond, kFirst);
+      return !other.clipped && !other.met ? Joined::No : Joined::Unknown;
+    }
+  return Joined::Unknown;
+}
+
+}  // namespace
+
+GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
+                         const SideChanges& changes, const SideLabels& before, const SideLabels& after) {
+  const Surroundings s = look_around(grid, cx, group, changes);
+  GroupVerdict verdict;
+  verdict.on_border = s.on_border;
+  verdict.euler_change = s.euler_change;
+  // One label per side each time keeps b0 and b2.
+  auto one_label = [](const std::vector<Id>& vs, const SideLabels& labels) {
+    if (vs.empty()) return false;
+    for (Id u : vs)
+      if (labels.label[std::size_t(u)] != labels.label[std::size_t(vs.front())]) return false;
+    return true;
+  };
+  verdict.keeps_components = one_label(s.vertices[0][0], before) && one_label(s.vertices[1][0], after);
+  verdict.keeps_cavities = one_label(s.vertices[0][1], before) && one_label(s.vertices[1][1], after);
   return verdict;
+}
+
+
+LocalVerdict judge_group_locally(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
+                                 const SideChanges& changes) {
+  const Surroundings s = look_around(grid, cx, group, changes);
+  LocalVerdict out;
+  out.verdict.on_border = s.on_border;
+  out.verdict.euler_change = s.euler_change;
+  auto inside_after = [&](Id u) { return grid.values[std::size_t(u)] <= 0; };
+  auto inside_before = [&](Id u) {
+    const auto it = changes.find(u);
+    return it != changes.end() ? it->second : inside_after(u);
+  };
+  // Each of the four sets joined within a small box, else a larger one; an empty set (no vertex of that side
+  // around the group) fails at once.
+  bool joined[2][2];
+  for (int when = 0; when < 2; ++when)
+    for (int side = 0; side < 2; ++side) {
+      const std::vector<Id>& vs = s.vertices[when][side];
+      bool& j = joined[when][side];
+      j = vs.size() == 1;
+      if (vs.empty() || j) continue;  // empty fails, as in judge_group: no label at all
+      auto same = [&](Id u) {
+        const bool in = when == 0 ? inside_before(u) : inside_after(u);
+        return in == (side == 0);
+      };
+      Joined verdict = Joined::Unknown;
+      for (int margin : {2, 6, 16, 40})
+        if (verdict == Joined::Unknown) verdict = joined_in_box(cx, vs, same, margin);
+      if (verdict == Joined::Unknown) return out;  // not settled here
+      j = verdict == Joined::Yes;
+    }
+  out.decided = true;
+  out.verdict.keeps_components = joined[0][0] && joined[1][0];
+  out.verdict.keeps_cavities = joined[0][1] && joined[1][1];
+  return out;
 }
 
 }  // namespace chokeloops::detail

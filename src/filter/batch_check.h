@@ -44,4 +44,16 @@ struct GroupVerdict {
 GroupVerdict judge_group(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
                          const SideChanges& changes, const SideLabels& before, const SideLabels& after);
 
+// The same verdict without labelling the grid, where the group's surroundings settle it: the vertices around the
+// group of each side, before and after, joined through that side within a box a few voxels around the group are
+// joined in the grid, so one label each. When some side's vertices are not joined there (a handle longer than the
+// box, or really split), `decided` is false and judge_group, with the labels of the whole grid, must judge; a
+// decided verdict is the one judge_group gives.
+struct LocalVerdict {
+  GroupVerdict verdict;
+  bool decided = false;
+};
+LocalVerdict judge_group_locally(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& group,
+                                 const SideChanges& changes);
+
 }  // namespace chokeloops::detail

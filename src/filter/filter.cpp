@@ -8,11 +8,12 @@
 // nearer than the old one; every other value stays bit-identical.
 //
 // Why rounds and a check. Each batch of edits is judged exactly, group by group (edits whose changed
-// vertices touch form a group; batch_check.h): a group must keep the components and sealed cavities (one
-// labelling of both sides after the batch) and lower the genus (its local change of the Euler
-// characteristic). Groups that fail are noted and undone, the others stay, with no bisection and no
-// persistence per check; one persistence per round then finds the pairs left and must agree with what the
-// labels and the Euler characteristic predicted (else an internal error). Pairs selected but left (e.g.
+// vertices touch form a group; batch_check.h): a group must keep the components and sealed cavities (each
+// side's vertices around it joined, searched near the group, or else one labelling of both sides) and lower
+// the genus (its local change of the Euler characteristic). Noise pairs whose saddle fails are tried again in
+// the same round with other small pieces (Attempt). Groups that fail are noted and undone, the others stay,
+// with no bisection and no persistence per check; one persistence per round then finds the pairs left and
+// must agree with what the checks predicted (else an internal error). Pairs selected but left (e.g.
 // their membrane did not close, or their edit was undone) are asked again in the next round, from the
 // edited field, with the other membrane shape first (the flood's sheet on odd rounds, a plane on even
 // ones), the other side of the pair preferred, and never again as a lone saddle vertex.
@@ -24,6 +25,8 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <functional>
+#include <optional>
 #include <sstream>
 #include <unordered_set>
 
@@ -85,6 +88,17 @@ std::string where(const Choke& c) {
   return s.str();
 }
 
+// What a noise pair's edit tries, in turn, while the check refuses it: its saddle alone, the other side's
+// saddle, its level piece, the other side's, then its membrane (a disc, not at the saddle). Each is tried in
+// the next wave of the same round, with no persistence run between.
+enum Attempt { kSaddle, kOtherSaddle, kLevelPiece, kOtherLevelPiece, kDisc };
+// An edit waiting to be applied, with its pair's generators, so that it can be made again.
+struct PendingEdit : FilterEdit {
+  const Choke* first = nullptr;  // the generator chosen for the pair
+  const Choke* other = nullptr;  // the pair's other generator, when that side may be edited too
+  int attempt = kDisc;
+};
+
 // The values an edit overwrote, in order (restored from the last), so that a failed check can put them back.
 struct Undo {
   std::vector<std::pair<Id, float>> old_values;
@@ -92,7 +106,7 @@ struct Undo {
 
 // Moves every edit's voxels to their new side and gives the vertices around them the distance to the new
 // surface where it is nearer than the old one. Returns what to restore.
-Undo apply_edits(ScalarGrid& grid, const std::vector<FilterEdit>& edits) {
+Undo apply_edits(ScalarGrid& grid, const std::vector<PendingEdit>& edits) {
   Undo undo;
   if (edits.empty()) return undo;
   FreudenthalComplex cx(grid.dims);
@@ -173,7 +187,7 @@ struct BatchGroups {
   std::vector<std::vector<std::size_t>> edits;  // per group, indices into the batch
 };
 
-BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<FilterEdit>& batch,
+BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<PendingEdit>& batch,
                           const Undo& undo) {
   BatchGroups g;
   for (const auto& [v, old] : undo.old_values)
@@ -215,25 +229,52 @@ BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, 
 // Applies the edits and keeps the groups of them that remove pairs of the genus and nothing else: the
 // components and sealed cavities stay, the genus drops, never below `floor` (the pairs --keep-genus keeps).
 // A group may lower the genus by more than one pair (an edit can take tiny pairs along). Groups that fail
-// are noted and undone, and the rest applied again until every group passes. `labels` are the current
-// field's and follow it; `now` is its analysis, recomputed once at the end for the next round, and checked
-// against what the labels and the Euler characteristic predicted.
-std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> edits, Analysis& now, detail::SideLabels& labels,
+// are noted and undone, and the rest applied again until every group passes. Most groups are judged from
+// their surroundings alone; `labels`, the current field's when known, are computed (and follow the field) only
+// for the groups whose surroundings do not settle it. `now` is the field's analysis, recomputed once at the end
+// for the next round, and checked against what the checks predicted: the same components and cavities, the
+// genus lowered by the groups' changes of the Euler characteristic. An edit at a noise pair's saddle that
+// failed (the vertices around the saddle close the handle without it, or the saddle was a speck's only
+// bridge) is made again by `remake` (the next Attempt) and waits for the next wave.
+std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit> edits, Analysis& now,
+                                      std::optional<detail::SideLabels>& labels,
+                                      const std::function<bool(PendingEdit&, std::string&)>& remake,
                                       int floor, std::vector<std::string>& notes,
                                       std::vector<std::pair<Side, std::array<double, 3>>>& failed, double& t_labels,
                                       double& t_persistence) {
   const FreudenthalComplex cx(grid.dims);
   int genus = now.summary.genus;
-  std::vector<FilterEdit> kept, waiting;
+  std::vector<FilterEdit> kept;
+  std::vector<PendingEdit> waiting;
   // Waves: a batch is applied and judged until every group in it passes; edits that touched others that
   // failed with them wait for the next wave, judged on the field the batch left.
   while (!edits.empty() || !waiting.empty()) {
     if (edits.empty()) edits = std::move(waiting), waiting.clear();
     const Undo undo = apply_edits(grid, edits);
     const BatchGroups groups = group_changes(grid, cx, edits, undo);
-    const auto t_l = Clock::now();
-    detail::SideLabels after = detail::label_sides(grid);
-    t_labels += ms_since(t_l);
+    const std::size_t n_groups = groups.edits.size();
+    std::vector<detail::GroupVerdict> verdicts(n_groups);
+    std::vector<char> decided(n_groups);
+    tbb::parallel_for(std::size_t(0), n_groups, [&](std::size_t gi) {
+      const detail::LocalVerdict local = detail::judge_group_locally(grid, cx, groups.vertices[gi], groups.changes);
+      verdicts[gi] = local.verdict;
+      decided[gi] = local.decided;
+    });
+    std::optional<detail::SideLabels> after;
+    if (std::find(decided.begin(), decided.end(), 0) != decided.end()) {
+      const auto t_l = Clock::now();
+      if (!labels) {  // the field before the batch, labelled with the batch taken back for a moment
+        std::vector<std::pair<Id, float>> redo;
+        for (const auto& [v, old] : undo.old_values) redo.push_back({v, grid.values[std::size_t(v)]});
+        restore(grid, undo);
+        labels = detail::label_sides(grid);
+        for (const auto& [v, value] : redo) grid.values[std::size_t(v)] = value;
+      }
+      after = detail::label_sides(grid);
+      for (std::size_t gi = 0; gi < n_groups; ++gi)
+        if (!decided[gi]) verdicts[gi] = detail::judge_group(grid, cx, groups.vertices[gi], groups.changes, *labels, *after);
+      t_labels += ms_since(t_l);
+    }
     // The groups in the order their best pair would be removed (least persistent first), so that the floor
     // keeps the most persistent.
     std::vector<std::size_t> order(groups.edits.size());
@@ -244,12 +285,12 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
       return p;
     };
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return persistence(a) < persistence(b); });
-    enum Fate : char { Keep, Drop, Wait };
+    enum Fate : char { Keep, Drop, Wait, Remake };
     std::vector<Fate> fate(edits.size(), Keep);
     bool all_pass = true;
     int batch_genus = genus;
     for (std::size_t gi : order) {
-      const detail::GroupVerdict v = detail::judge_group(grid, cx, groups.vertices[gi], groups.changes, labels, after);
+      const detail::GroupVerdict& v = verdicts[gi];
       std::string why;
       if (groups.vertices[gi].empty()) why = "changed no vertex's side";
       else if (v.on_border) why = "reached the side of the grid";
@@ -272,6 +313,11 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
         for (std::size_t e : members) fate[e] = e == first ? Keep : Wait;
         continue;
       }
+      if (members.size() == 1 && edits[members[0]].attempt < kDisc && !v.on_border && !groups.vertices[gi].empty() &&
+          (v.euler_change <= 0 || !v.keeps_components || !v.keeps_cavities)) {
+        fate[members[0]] = Remake;
+        continue;
+      }
       for (std::size_t e : members) {
         fate[e] = Drop;
         failed.push_back({edits[e].side, edits[e].point});
@@ -281,20 +327,35 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<FilterEdit> 
     if (all_pass) {
       labels = std::move(after);
       genus = batch_genus;
-      for (auto& e : edits) kept.push_back(std::move(e));
+      for (auto& e : edits) kept.push_back(std::move(static_cast<FilterEdit&>(e)));
       edits.clear();
       continue;
     }
     restore(grid, undo);
-    std::vector<FilterEdit> rest;
+    std::vector<PendingEdit> rest;
+    std::vector<std::size_t> remade;
     for (std::size_t i = 0; i < edits.size(); ++i) {
       if (fate[i] == Keep) rest.push_back(std::move(edits[i]));
       else if (fate[i] == Wait) waiting.push_back(std::move(edits[i]));
+      else if (fate[i] == Remake) remade.push_back(i);
+    }
+    // On the field before this batch, in parallel (each membrane is a flood of its own).
+    std::vector<std::string> why_not(remade.size());
+    std::vector<char> ready(remade.size());
+    tbb::parallel_for(std::size_t(0), remade.size(), [&](std::size_t r) { ready[r] = remake(edits[remade[r]], why_not[r]); });
+    for (std::size_t r = 0; r < remade.size(); ++r) {
+      PendingEdit& e = edits[remade[r]];
+      if (ready[r]) {
+        waiting.push_back(std::move(e));
+        continue;
+      }
+      failed.push_back({e.side, e.point});
+      notes.push_back(describe(e) + ": " + why_not[r]);
     }
     edits = std::move(rest);
   }
   if (kept.empty()) return kept;
-  const FilterSummary predicted{genus, labels.inside_components, labels.cavities};
+  const FilterSummary predicted{genus, now.summary.components, now.summary.cavities};
   if (floor >= 0 && genus == floor) {
     // --keep-genus reached: no pair is left to select, and the summary is known exactly without a
     // persistence run (the file path still reads its output back and checks it by persistence).
@@ -338,11 +399,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
   const double p_max = options.max_persistence.resolve(report.R_in + report.R_out);
   const double voxel_volume = grid.h(0) * grid.h(1) * grid.h(2);
   Analysis now = std::move(first);
-  detail::SideLabels labels = detail::label_sides(grid);
-  if (labels.inside_components != now.summary.components || labels.cavities != now.summary.cavities)
-    throw InternalError("filter: persistence finds " + std::to_string(now.summary.components) + " components and " +
-                        std::to_string(now.summary.cavities) + " cavities, labelling " + std::to_string(labels.inside_components) +
-                        " and " + std::to_string(labels.cavities));
+  std::optional<detail::SideLabels> labels;  // labelled only when a check needs the whole grid
   double t_membranes = 0, t_edits = 0, t_labels = 0, t_persistence = 0;
   std::vector<std::string> unresolved, undone;
   std::vector<std::pair<Side, std::array<double, 3>>> failed;  // edits undone as splitting or sealing
@@ -380,22 +437,11 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
         if (side == g.side && close_to(point, g.point, grid.voxel_size)) return true;
       return false;
     };
-    tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {
-      Candidate& c = candidates[job / 2];
-      const bool cut = job % 2 == 0;
-      if (!(cut ? c.cut : c.fill)) return;
-      MembraneVoxels& m = cut ? c.cut_voxels : c.fill_voxels;
-      const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
-      // An edit of this generator undone before is not tried again as its saddle alone.
-      // Boxes stay near the pair (a few times the box its depth asks for) until a round keeps nothing; then
-      // they may grow to 16 times that (at least 64 voxels), for the few pairs left. Not to the whole grid:
-      // on the noisy 256^3 cube the last 4 sub-voxel pairs flooded it for 16 s in vain, and on the grey-matter
-      // map the wider cap removes the same 875 pairs with the same 3290 voxels.
-      LoopOptions lo = options.membrane;
-      const int base = int(std::ceil(lo.box_factor * g.depth / grid.voxel_size)) + lo.box_margin;
-      if (!wide_boxes) lo.max_box_radius = std::max(16, 4 * base);
-      else lo.max_box_radius = std::max(64, 16 * base);
-      m = closing_membrane_voxels(grid, g, lo, shape, !failed_before(g));
+    // Boxes stay near the pair (a few times the box its depth asks for) until a round keeps nothing; then
+    // they may grow to 16 times that (at least 64 voxels), for the few pairs left. Not to the whole grid:
+    // on the noisy 256^3 cube the last 4 sub-voxel pairs flooded it for 16 s in vain, and on the grey-matter
+    // map the wider cap removes the same 875 pairs with the same 3290 voxels.
+    auto allowed = [&](MembraneVoxels m) {
       if (m.found && options.can_change)
         for (Id v : m.shore)
           if (!options.can_change(v)) {
@@ -403,9 +449,25 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
             m.note = "its membrane would change voxels that may not change";
             break;
           }
+      return m;
+    };
+    auto membrane_of = [&](const Choke& g, bool saddle_alone, MembraneShape shape) {
+      LoopOptions lo = options.membrane;
+      const int base = int(std::ceil(lo.box_factor * g.depth / grid.voxel_size)) + lo.box_margin;
+      if (!wide_boxes) lo.max_box_radius = std::max(16, 4 * base);
+      else lo.max_box_radius = std::max(64, 16 * base);
+      return allowed(closing_membrane_voxels(grid, g, lo, shape, saddle_alone));
+    };
+    tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {
+      Candidate& c = candidates[job / 2];
+      const bool cut = job % 2 == 0;
+      if (!(cut ? c.cut : c.fill)) return;
+      const Choke& g = cut ? c.pair->handle : c.pair->tunnel;
+      // An edit of this generator undone before is not tried again as its saddle alone.
+      (cut ? c.cut_voxels : c.fill_voxels) = membrane_of(g, !failed_before(g), shape);
     });
     t_membranes += ms_since(t_m);
-    std::vector<FilterEdit> edits;
+    std::vector<PendingEdit> edits;
     for (const Candidate& c : candidates) {
       const MembraneVoxels* pick = nullptr;
       Side side = Side::Handle;
@@ -423,7 +485,10 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
         continue;
       }
       const Choke& g = side == Side::Handle ? c.pair->handle : c.pair->tunnel;
-      FilterEdit e;
+      PendingEdit e;
+      e.first = &g;
+      if (c.cut && c.fill) e.other = side == Side::Handle ? &c.pair->tunnel : &c.pair->handle;
+      e.attempt = pick->at_saddle ? kSaddle : kDisc;
       e.side = side;
       e.round = round;
       e.depth = g.depth;
@@ -435,7 +500,33 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     }
     const auto t_e = Clock::now();
     undone.clear();
-    std::vector<FilterEdit> kept = apply_checked(grid, std::move(edits), now, labels, options.keep_genus, undone, failed, t_labels, t_persistence);
+    // The next of a noise pair's attempts that closes (see Attempt); the other side only when it is as thin.
+    auto remake = [&](PendingEdit& e, std::string& why_not) {
+      const bool other_ok = e.other && e.other->depth < 0.5 * grid.voxel_size && !failed_before(*e.other);
+      std::string last;
+      for (int next = e.attempt + 1; next <= kDisc; ++next) {
+        const bool on_other = next == kOtherSaddle || next == kOtherLevelPiece;
+        if (on_other && !other_ok) continue;
+        const Choke& g = on_other ? *e.other : *e.first;
+        const MembraneShape piece = next <= kOtherSaddle ? MembraneShape::Saddle : MembraneShape::LevelPiece;
+        MembraneVoxels m = next == kDisc ? membrane_of(g, false, shape) : allowed(membrane_voxels(grid, g, options.membrane, piece));
+        if (!m.found) {
+          last = m.note;
+          continue;
+        }
+        e.attempt = next;
+        e.side = g.side;
+        e.depth = g.depth;
+        e.point = g.point;
+        e.voxels = std::move(m.shore);
+        e.volume = double(e.voxels.size()) * voxel_volume;
+        return true;
+      }
+      why_not = "neither the saddles nor their level pieces removed the pair, and " + last;
+      return false;
+    };
+    std::vector<FilterEdit> kept =
+        apply_checked(grid, std::move(edits), now, labels, remake, options.keep_genus, undone, failed, t_labels, t_persistence);
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;

@@ -137,16 +137,55 @@ Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const std
   return result;
 }
 
+// The choke's saddle with the vertices joined to it between the surface and the pair's own level (a handle's
+// birth b <= f <= 0, a tunnel's 0 < f <= death): the piece that the pair's simplex needs to exist at level 0.
+MembraneVoxels level_piece(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c) {
+  constexpr std::size_t kMaxVertices = 64;
+  MembraneVoxels out;
+  const bool handle = c.side == Side::Handle;
+  auto in_piece = [&](Id v) {
+    const float f = grid.values[std::size_t(v)];
+    return handle ? f >= c.birth && f <= 0 : f > 0 && f <= c.death;
+  };
+  std::vector<Id> piece{c.saddle};
+  for (std::size_t q = 0; q < piece.size(); ++q) {
+    const auto p = cx.coords(piece[q]);
+    for (int k = 0; k < 14; ++k) {
+      if (!cx.neighbor_inside(p, k)) continue;
+      const Id u = piece[q] + cx.neighbor_delta(k);
+      if (!in_piece(u) || std::find(piece.begin(), piece.end(), u) != piece.end()) continue;
+      if (piece.size() == kMaxVertices) {
+        out.note = "its level piece has more than " + std::to_string(kMaxVertices) + " vertices";
+        return out;
+      }
+      piece.push_back(u);
+    }
+  }
+  std::sort(piece.begin(), piece.end());
+  out.shore = std::move(piece);
+  out.found = true;
+  out.at_saddle = true;
+  return out;
+}
+
 }  // namespace
 
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape) {
   MembraneVoxels out;
+  FreudenthalComplex cx(grid.dims);
   if (shape == MembraneShape::Saddle) {
     out.found = true;
+    out.at_saddle = true;
     out.shore = {c.saddle};
+    // A tunnel's triangle joins the solid only with all its vertices: those outside besides the saddle too.
+    if (c.simplex_dim == 2 && c.simplex >= 0) {
+      for (Id v : cx.triangle_vertices(c.simplex))
+        if (v != c.saddle && grid.values[std::size_t(v)] > 0) out.shore.push_back(v);
+      std::sort(out.shore.begin(), out.shore.end());
+    }
     return out;
   }
-  FreudenthalComplex cx(grid.dims);
+  if (shape == MembraneShape::LevelPiece) return level_piece(grid, cx, c);
   const double h = grid.voxel_size;
   const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
   int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;

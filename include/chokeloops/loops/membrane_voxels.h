@@ -15,14 +15,18 @@ struct MembraneVoxels {
   std::string note;      // why not found
   std::vector<Id> shore;  // grid vertices, ascending: the smaller shore of the sheet through the choke
   int box_radius = 0;    // half-size in voxels of the box the sheet closed in
+  bool at_saddle = false;  // the saddle alone or its level piece (MembraneShape::Saddle, LevelPiece), not a disc
 };
 
 // Sheet: the flood's contact sheet through the choke's saddle (follows a bent handle). Plane: the piece
 // through the saddle of a digital plane across the line between the two seed pieces, thick enough that no
 // Freudenthal edge jumps it (a straight cut; on a flat core, where the filtration order spreads the two
 // zones erratically and their contact can wrap around, it still crosses the handle once).
-// Saddle: the choke's saddle vertex alone, for pairs thinner than a voxel (noise), where neither closes.
-enum class MembraneShape { Sheet, Plane, Saddle };
+// Saddle: the choke's saddle vertex alone (for a tunnel, with its triangle's other vertices outside: the
+// triangle is in the solid only with all three), for pairs thinner than a voxel (noise), where neither closes.
+// LevelPiece: the saddle with the vertices joined to it between the surface and the pair's level (a handle's
+// birth <= f <= 0, a tunnel's 0 < f <= death; at most 64), for noise pairs whose saddle alone is not enough.
+enum class MembraneShape { Sheet, Plane, Saddle, LevelPiece };
 
 // The membrane of the choke, grown in boxes (LoopOptions::box_factor, box_margin) until it closes inside one.
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
