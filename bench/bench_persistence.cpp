@@ -45,8 +45,11 @@
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/topology/persistence.h"
 #include "../tests/phat_oracle.h"
+#include "peer_process.h"
 
 using namespace chokeloops;
+using bench::run_peer;
+using bench::write_raw_mirrored_x;
 
 namespace {
 
@@ -156,34 +159,6 @@ void write_npy(const ScalarGrid& g, const std::string& path) {
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
-// Runs argv as a child process; wall seconds and its peak RSS (MB) from wait4. False if it failed.
-bool run_peer(const std::vector<std::string>& argv, double& seconds, double& peak_mb, std::string& error) {
-  std::vector<char*> args;
-  for (auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  std::fflush(stdout);
-  auto t = std::chrono::steady_clock::now();
-  pid_t pid = fork();
-  if (pid < 0) { error = "fork failed"; return false; }
-  if (pid == 0) {
-    int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    execv(args[0], args.data());
-    _exit(127);
-  }
-  int status = 0;
-  struct rusage ru;
-  wait4(pid, &status, 0, &ru);
-  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  peak_mb = double(ru.ru_maxrss) / 1024.0;
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    error = argv[0] + (WIFSIGNALED(status) ? " killed by signal " + std::to_string(WTERMSIG(status))
-                                           : " exited with " + std::to_string(WEXITSTATUS(status)));
-    return false;
-  }
-  return true;
-}
-
 // Runs a peer's argv `runs` times: r's wall time (median) and peak RSS (largest), r.ok; false with `error`
 // set at the first failing run.
 bool time_peer(const std::vector<std::string>& argv, int runs, Result& r, std::string& error) {
@@ -215,18 +190,6 @@ Result measure_cubicalripser(const std::string& bin, const std::string& field, i
   std::remove(npy.c_str());
   rmdir(dir);
   return r;
-}
-
-// The field as raw float32, x fastest, mirrored along x (TTK's input: see measure_ttk).
-void write_raw_mirrored_x(const ScalarGrid& g, const std::string& path) {
-  std::ofstream out(path, std::ios::binary);
-  const std::size_t nx = std::size_t(g.dims[0]);
-  std::vector<float> row(nx);
-  for (std::size_t r = 0; r < g.values.size() / nx; ++r) {
-    for (std::size_t i = 0; i < nx; ++i) row[i] = g.values[r * nx + (nx - 1 - i)];
-    out.write(reinterpret_cast<const char*>(row.data()), std::streamsize(nx * sizeof(float)));
-  }
-  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 struct ValuePair {
