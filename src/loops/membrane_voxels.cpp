@@ -137,10 +137,55 @@ Sheet plane_piece(const detail::FloodBox& box, const ScalarGrid& grid, const std
   return result;
 }
 
+// Noise that hangs on a saddle's piece only is a few vertices.
+constexpr std::size_t kSpeck = 8;
+
+// The pieces of the piece's own side that hung on it only (a speck of noise, a pocket of a few voxels), at
+// most `max_vertices` each: they would become components or cavities of their own once the piece changes side,
+// so they change side with it. Appended to `piece`, which ends sorted.
+void add_small_debris(const ScalarGrid& grid, const FreudenthalComplex& cx, std::vector<Id>& piece,
+                      std::size_t max_vertices) {
+  const bool inside = grid.values[std::size_t(piece.front())] <= 0;
+  auto same_side = [&](Id u) { return (grid.values[std::size_t(u)] <= 0) == inside; };
+  std::vector<Id> taken(piece.begin(), piece.end()), tried;
+  std::sort(taken.begin(), taken.end());
+  auto known = [](const std::vector<Id>& sorted, Id v) { return std::binary_search(sorted.begin(), sorted.end(), v); };
+  const std::size_t original = piece.size();
+  for (std::size_t q = 0; q < original; ++q) {
+    const auto p = cx.coords(piece[q]);
+    for (int k = 0; k < 14; ++k) {
+      if (!cx.neighbor_inside(p, k)) continue;
+      const Id start = piece[q] + cx.neighbor_delta(k);
+      if (!same_side(start) || known(taken, start) || std::find(tried.begin(), tried.end(), start) != tried.end()) continue;
+      std::vector<Id> speck{start};
+      bool small = true;
+      for (std::size_t i = 0; i < speck.size() && small; ++i) {
+        const auto c = cx.coords(speck[i]);
+        for (int m = 0; m < 14 && small; ++m) {
+          if (!cx.neighbor_inside(c, m)) continue;
+          const Id u = speck[i] + cx.neighbor_delta(m);
+          if (!same_side(u) || known(taken, u) || std::find(speck.begin(), speck.end(), u) != speck.end()) continue;
+          if (speck.size() == max_vertices) small = false;
+          else speck.push_back(u);
+        }
+      }
+      if (!small) {
+        tried.insert(tried.end(), speck.begin(), speck.end());
+        continue;
+      }
+      piece.insert(piece.end(), speck.begin(), speck.end());
+      taken.insert(taken.end(), speck.begin(), speck.end());
+      std::sort(taken.begin(), taken.end());
+    }
+  }
+  std::sort(piece.begin(), piece.end());
+}
+
 // The choke's saddle with the vertices joined to it between the surface and the pair's own level (a handle's
-// birth b <= f <= 0, a tunnel's 0 < f <= death): the piece that the pair's simplex needs to exist at level 0.
+// birth b <= f <= 0, a tunnel's 0 < f <= death), within a voxel of the saddle: the piece that the pair's simplex
+// needs to exist at level 0.
 MembraneVoxels level_piece(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c) {
-  constexpr std::size_t kMaxVertices = 64;
+  constexpr int kReach = 1;  // voxels from the saddle: the surface moves by about that much, as for a noise pair
   MembraneVoxels out;
   const bool handle = c.side == Side::Handle;
   auto in_piece = [&](Id v) {
@@ -148,20 +193,20 @@ MembraneVoxels level_piece(const ScalarGrid& grid, const FreudenthalComplex& cx,
     return handle ? f >= c.birth && f <= 0 : f > 0 && f <= c.death;
   };
   std::vector<Id> piece{c.saddle};
+  const auto centre = cx.coords(c.saddle);
   for (std::size_t q = 0; q < piece.size(); ++q) {
     const auto p = cx.coords(piece[q]);
     for (int k = 0; k < 14; ++k) {
       if (!cx.neighbor_inside(p, k)) continue;
+      const auto o = freudenthal::neighbor_offset(k);
+      bool near = true;
+      for (int a = 0; a < 3; ++a) near = near && std::abs(p[a] + o[a] - centre[a]) <= kReach;
       const Id u = piece[q] + cx.neighbor_delta(k);
-      if (!in_piece(u) || std::find(piece.begin(), piece.end(), u) != piece.end()) continue;
-      if (piece.size() == kMaxVertices) {
-        out.note = "its level piece has more than " + std::to_string(kMaxVertices) + " vertices";
-        return out;
-      }
+      if (!near || !in_piece(u) || std::find(piece.begin(), piece.end(), u) != piece.end()) continue;
       piece.push_back(u);
     }
   }
-  std::sort(piece.begin(), piece.end());
+  add_small_debris(grid, cx, piece, kSpeck);
   out.shore = std::move(piece);
   out.found = true;
   out.at_saddle = true;
@@ -181,8 +226,8 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
     if (c.simplex_dim == 2 && c.simplex >= 0) {
       for (Id v : cx.triangle_vertices(c.simplex))
         if (v != c.saddle && grid.values[std::size_t(v)] > 0) out.shore.push_back(v);
-      std::sort(out.shore.begin(), out.shore.end());
     }
+    add_small_debris(grid, cx, out.shore, kSpeck);
     return out;
   }
   if (shape == MembraneShape::LevelPiece) return level_piece(grid, cx, c);

@@ -25,7 +25,8 @@ struct MembraneVoxels {
 // Saddle: the choke's saddle vertex alone (for a tunnel, with its triangle's other vertices outside: the
 // triangle is in the solid only with all three), for pairs thinner than a voxel (noise), where neither closes.
 // LevelPiece: the saddle with the vertices joined to it between the surface and the pair's level (a handle's
-// birth <= f <= 0, a tunnel's 0 < f <= death; at most 64), for noise pairs whose saddle alone is not enough.
+// birth <= f <= 0, a tunnel's 0 < f <= death) within a voxel of it, for noise pairs whose saddle alone is not
+// enough. Saddle and LevelPiece take along the specks (at most 8 vertices) that hung on them only.
 enum class MembraneShape { Sheet, Plane, Saddle, LevelPiece };
 
 // The membrane of the choke, grown in boxes (LoopOptions::box_factor, box_margin) until it closes inside one.
