@@ -144,6 +144,7 @@ Figures in_child(const std::string& name) {
   int fd[2];
   Figures f;
   if (pipe(fd) != 0) return f;
+  std::fflush(stdout);  // else the child's own flushes (the peer's) print the parent's buffer again
   const pid_t pid = fork();
   if (pid == 0) {
     close(fd[0]);
