@@ -8,7 +8,7 @@
 # Then runs the selected tests with ctest -R.
 # Usage: scripts/test-sanitize.sh [ctest -R regex]
 #   default (full): bad input, .vdb IO, persistence against PHAT and its meaning, topology and surface, loops on
-#   analytic shapes, shortening, molecules, volumes, the filter and the command-line errors (no browser tests,
+#   analytic shapes, shortening, molecules, volumes, the filter and its checks, the command-line errors (no browser tests,
 #   no manifest meshes: those take long under ASan);
 #   default (input): the bad-input suite, .vdb IO, level-set accuracy and winding-number tests.
 # Environment: JOBS=N (default 2), BUILD_DIR, SANITIZE_SCOPE, CXX (default clang++ when installed: it compiles
@@ -22,7 +22,7 @@ fi
 case "${SANITIZE_SCOPE:-full}" in
   full)
     BUILD="${BUILD_DIR:-$ROOT/build-asan}"
-    REGEX="${1:-BadInput|VdbIo|Oracle|PersistenceMeaning|PersistenceEuler|PersistenceVsSurface|Topology|^Surface\.|AnalyzeAnalytic|Shorten|Molecule|Volume|MetaImage|^Filter|CliArgs|CliPersistence|WindingNumber|LevelSetAccuracy|LevelSetCsg|LevelSetVdbInput}"
+    REGEX="${1:-BadInput|VdbIo|Oracle|PersistenceMeaning|PersistenceEuler|PersistenceVsSurface|Topology|^Surface\.|AnalyzeAnalytic|Shorten|Molecule|Volume|MetaImage|^Filter|BatchCheck|CliArgs|CliPersistence|WindingNumber|LevelSetAccuracy|LevelSetCsg|LevelSetVdbInput}"
     cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Debug -DCHOKELOOPS_SANITIZE_FULL=ON >/dev/null
     cmake --build "$BUILD" -j"$JOBS" --target chokeloops chokeloops_tests
     ;;
