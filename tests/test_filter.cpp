@@ -33,6 +33,20 @@ Sdf drilled_ball(double hole_r) {
   };
 }
 
+// Filters `base` again on one thread: the same edits and the same field, bit for bit, as `all_threads` gave.
+void expect_the_same_on_one_thread(const ScalarGrid& base, const FilterOptions& o, const FilterReport& all_threads,
+                                   const ScalarGrid& filtered) {
+  ScalarGrid one = base;
+  FilterReport r1;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    r1 = filter_grid(one, o);
+  }
+  ASSERT_EQ(r1.edits.size(), all_threads.edits.size());
+  for (std::size_t i = 0; i < r1.edits.size(); ++i) EXPECT_EQ(r1.edits[i].voxels, all_threads.edits[i].voxels) << "edit " << i;
+  EXPECT_TRUE(one.values == filtered.values);
+}
+
 std::string notes_of(const FilterReport& r) {
   std::string s;
   for (const auto& n : r.notes) s += "\n  " + n;
@@ -159,12 +173,7 @@ TEST(Filter, NoisePairsWhoseSaddleFailsAreRemovedInTheSameRound) {
   ASSERT_GT(noisy.genus, 400);
   FilterOptions o;
   o.keep_genus = 5;
-  ScalarGrid one = base, all = base;
-  FilterReport r1;
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    r1 = filter_grid(one, o);
-  }
+  ScalarGrid all = base;
   const FilterReport r = filter_grid(all, o);
   EXPECT_EQ(r.after.genus, 5);
   EXPECT_EQ(r.after.components, noisy.components);
@@ -173,9 +182,7 @@ TEST(Filter, NoisePairsWhoseSaddleFailsAreRemovedInTheSameRound) {
   EXPECT_LE(r.rounds, 2);
   EXPECT_LT(r.voxels_changed, 10 * r.edits.size());
   EXPECT_EQ(topology_summary(all).genus, 5);
-  ASSERT_EQ(r1.edits.size(), r.edits.size());
-  for (std::size_t i = 0; i < r.edits.size(); ++i) EXPECT_EQ(r1.edits[i].voxels, r.edits[i].voxels) << "edit " << i;
-  EXPECT_TRUE(one.values == all.values);
+  expect_the_same_on_one_thread(base, o, r, all);
 }
 
 // The same edits and the same field bit for bit on one thread as on all of them (membranes in parallel,
@@ -185,17 +192,10 @@ TEST(Filter, ResultDoesNotDependOnTheThreadCount) {
   add_uniform_noise(base, 0.25 * base.voxel_size, 11);
   FilterOptions o;
   o.keep_genus = 5;
-  ScalarGrid one = base, all = base;
-  FilterReport r1;
-  {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    r1 = filter_grid(one, o);
-  }
-  const FilterReport r2 = filter_grid(all, o);
-  EXPECT_EQ(r1.after.genus, 5);
-  ASSERT_EQ(r1.edits.size(), r2.edits.size());
-  for (std::size_t i = 0; i < r1.edits.size(); ++i) EXPECT_EQ(r1.edits[i].voxels, r2.edits[i].voxels) << "edit " << i;
-  EXPECT_TRUE(one.values == all.values);
+  ScalarGrid all = base;
+  const FilterReport r = filter_grid(all, o);
+  EXPECT_EQ(r.after.genus, 5);
+  expect_the_same_on_one_thread(base, o, r, all);
 }
 
 TEST(Filter, ImpossibleRequestsAreRefused) {

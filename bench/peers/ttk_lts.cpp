@@ -7,9 +7,10 @@
 //   FIELD.raw, OUT.raw  NX*NY*NZ little-endian float32, x fastest
 // Prints the seconds of the vertex order, of the triangulation's preconditioning and of the simplification.
 #include <LocalizedTopologicalSimplification.h>
-#include <OrderDisambiguation.h>
 #include <Timer.h>
 #include <Triangulation.h>
+
+#include "ttk_raw_field.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -22,21 +23,8 @@ int main(int argc, char** argv) {
   }
   const int nx = std::atoi(argv[2]), ny = std::atoi(argv[3]), nz = std::atoi(argv[4]), threads = std::atoi(argv[5]);
   const float threshold = float(std::atof(argv[6]));
-  const std::size_t n = std::size_t(nx) * ny * nz;
-  std::vector<float> field(n);
-  std::FILE* in = std::fopen(argv[1], "rb");
-  if (!in || std::fread(field.data(), sizeof(float), n, in) != n) {
-    std::fprintf(stderr, "ttk_lts: cannot read %zu floats from %s\n", n, argv[1]);
-    return 2;
-  }
-  std::fclose(in);
-  ttk::globalThreadNumber_ = threads;
-  ttk::globalDebugLevel_ = 0;
-
-  ttk::Timer order_timer;
-  std::vector<ttk::SimplexId> order(n);
-  ttk::preconditionOrderArray(n, field.data(), order.data(), threads);
-  const double order_s = order_timer.getElapsedTime();
+  TtkField f;
+  if (!read_ttk_field("ttk_lts", argv[1], nx, ny, nz, threads, f)) return 2;
 
   ttk::Timer precondition_timer;
   ttk::Triangulation triangulation;
@@ -51,15 +39,15 @@ int main(int argc, char** argv) {
   int status = 0;
   ttkTemplateMacro(triangulation.getType(),
                    status = (lts.removeNonPersistentExtrema<float, ttk::SimplexId, TTK_TT>(
-                       field.data(), order.data(), static_cast<const TTK_TT*>(triangulation.getData()), threshold, true)));
+                       f.values.data(), f.order.data(), static_cast<const TTK_TT*>(triangulation.getData()), threshold, true)));
   const double simplify_s = simplify_timer.getElapsedTime();
   if (status != 0) {
     std::fprintf(stderr, "ttk_lts: TTK failed (%d)\n", status);
     return 1;
   }
-  std::printf("order %.3f s, precondition %.3f s, simplification %.3f s\n", order_s, precondition_s, simplify_s);
+  std::printf("order %.3f s, precondition %.3f s, simplification %.3f s\n", f.order_seconds, precondition_s, simplify_s);
   std::FILE* out = std::fopen(argv[7], "wb");
-  if (!out || std::fwrite(field.data(), sizeof(float), n, out) != n || std::fclose(out) != 0) {
+  if (!out || std::fwrite(f.values.data(), sizeof(float), f.values.size(), out) != f.values.size() || std::fclose(out) != 0) {
     std::fprintf(stderr, "ttk_lts: cannot write %s\n", argv[7]);
     return 2;
   }

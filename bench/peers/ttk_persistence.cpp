@@ -7,10 +7,11 @@
 //   FIELD.raw  NX*NY*NZ little-endian float32, x fastest
 //   PAIRS.csv  the finite pairs as "dim,birth,death" (%.9g), for bench_persistence to compare with its own
 // Prints the seconds of the vertex order, of the triangulation's preconditioning and of the diagram.
-#include <OrderDisambiguation.h>
 #include <PersistenceDiagram.h>
 #include <Timer.h>
 #include <Triangulation.h>
+
+#include "ttk_raw_field.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -23,21 +24,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   const int nx = std::atoi(argv[2]), ny = std::atoi(argv[3]), nz = std::atoi(argv[4]), threads = std::atoi(argv[5]);
-  const std::size_t n = std::size_t(nx) * ny * nz;
-  std::vector<float> field(n);
-  std::FILE* in = std::fopen(argv[1], "rb");
-  if (!in || std::fread(field.data(), sizeof(float), n, in) != n) {
-    std::fprintf(stderr, "ttk_persistence: cannot read %zu floats from %s\n", n, argv[1]);
-    return 2;
-  }
-  std::fclose(in);
-  ttk::globalThreadNumber_ = threads;
-  ttk::globalDebugLevel_ = 0;
-
-  ttk::Timer order_timer;
-  std::vector<ttk::SimplexId> order(n);
-  ttk::preconditionOrderArray(n, field.data(), order.data(), threads);
-  const double order_s = order_timer.getElapsedTime();
+  TtkField f;
+  if (!read_ttk_field("ttk_persistence", argv[1], nx, ny, nz, threads, f)) return 2;
 
   ttk::Timer precondition_timer;
   ttk::Triangulation triangulation;
@@ -53,7 +41,7 @@ int main(int argc, char** argv) {
   std::vector<ttk::PersistencePair> pairs;
   int status = 0;
   ttkTemplateMacro(triangulation.getType(),
-                   status = diagram.execute(pairs, field.data(), 0, order.data(),
+                   status = diagram.execute(pairs, f.values.data(), 0, f.order.data(),
                                             static_cast<const TTK_TT*>(triangulation.getData())));
   const double diagram_s = diagram_timer.getElapsedTime();
   if (status != 0) {
@@ -63,7 +51,7 @@ int main(int argc, char** argv) {
   long long count[3] = {0, 0, 0};
   for (const auto& p : pairs)
     if (p.isFinite && p.dim >= 0 && p.dim < 3) ++count[p.dim];
-  std::printf("order %.3f s, precondition %.3f s, diagram %.3f s; finite pairs %lld %lld %lld\n", order_s,
+  std::printf("order %.3f s, precondition %.3f s, diagram %.3f s; finite pairs %lld %lld %lld\n", f.order_seconds,
               precondition_s, diagram_s, count[0], count[1], count[2]);
   if (argc > 6) {
     std::FILE* out = std::fopen(argv[6], "w");
