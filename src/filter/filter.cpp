@@ -287,6 +287,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return persistence(a) < persistence(b); });
     enum Fate : char { Keep, Drop, Wait, Remake };
     std::vector<Fate> fate(edits.size(), Keep);
+    std::vector<std::string> remake_why(edits.size());  // why the attempt to be remade failed
     bool all_pass = true;
     int batch_genus = genus;
     for (std::size_t gi : order) {
@@ -316,6 +317,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
       if (members.size() == 1 && edits[members[0]].attempt < kDisc && !v.on_border && !groups.vertices[gi].empty() &&
           (v.euler_change <= 0 || !v.keeps_components || !v.keeps_cavities)) {
         fate[members[0]] = Remake;
+        remake_why[members[0]] = why;
         continue;
       }
       for (std::size_t e : members) {
@@ -350,7 +352,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
         continue;
       }
       failed.push_back({e.side, e.point});
-      notes.push_back(describe(e) + ": " + why_not[r]);
+      notes.push_back(describe(e) + " " + remake_why[remade[r]] + "; " + why_not[r] + ": undone");
     }
     edits = std::move(rest);
   }
