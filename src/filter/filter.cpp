@@ -89,9 +89,9 @@ std::string where(const Choke& c) {
 }
 
 // What a noise pair's edit tries, in turn, while the check refuses it: its saddle alone, the other side's
-// saddle, its level piece, the other side's, then its membrane (a disc, not at the saddle). Each is tried in
-// the next wave of the same round, with no persistence run between.
-enum Attempt { kSaddle, kOtherSaddle, kLevelPiece, kOtherLevelPiece, kDisc };
+// saddle, its level piece, the other side's, the pinch nearest its saddle, the other side's, then its membrane
+// (a disc, not at the saddle). Each is tried in the next wave of the same round, with no persistence run between.
+enum Attempt { kSaddle, kOtherSaddle, kLevelPiece, kOtherLevelPiece, kPinch, kOtherPinch, kDisc };
 // An edit waiting to be applied, with its pair's generators, so that it can be made again.
 struct PendingEdit : FilterEdit {
   const Choke* first = nullptr;  // the generator chosen for the pair
@@ -507,10 +507,12 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       const bool other_ok = e.other && e.other->depth < 0.5 * grid.voxel_size && !failed_before(*e.other);
       std::string last;
       for (int next = e.attempt + 1; next <= kDisc; ++next) {
-        const bool on_other = next == kOtherSaddle || next == kOtherLevelPiece;
+        const bool on_other = next == kOtherSaddle || next == kOtherLevelPiece || next == kOtherPinch;
         if (on_other && !other_ok) continue;
         const Choke& g = on_other ? *e.other : *e.first;
-        const MembraneShape piece = next <= kOtherSaddle ? MembraneShape::Saddle : MembraneShape::LevelPiece;
+        const MembraneShape piece = next <= kOtherSaddle       ? MembraneShape::Saddle
+                                    : next <= kOtherLevelPiece ? MembraneShape::LevelPiece
+                                                               : MembraneShape::NearbyPinch;
         MembraneVoxels m = next == kDisc ? membrane_of(g, false, shape) : allowed(membrane_voxels(grid, g, options.membrane, piece));
         if (!m.found) {
           last = m.note;
@@ -524,7 +526,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
         e.volume = double(e.voxels.size()) * voxel_volume;
         return true;
       }
-      why_not = "neither the saddles nor their level pieces removed the pair, and " + last;
+      why_not = "neither the saddles, their level pieces nor the pinches near them removed the pair, and " + last;
       return false;
     };
     std::vector<FilterEdit> kept =

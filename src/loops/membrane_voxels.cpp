@@ -213,6 +213,51 @@ MembraneVoxels level_piece(const ScalarGrid& grid, const FreudenthalComplex& cx,
   return out;
 }
 
+// Whether flipping v alone would lower the genus of its side: the part of its link on its side is two pieces
+// (chi 2), so that v joins two sheets there, a pinch of the level set.
+bool pinches(const ScalarGrid& grid, const FreudenthalComplex& cx, Id v, bool inside) {
+  const auto& link = freudenthal::vertex_link();
+  const auto p = cx.coords(v);
+  bool on[14];
+  for (int k = 0; k < 14; ++k)
+    on[k] = cx.neighbor_inside(p, k) && (grid.values[std::size_t(v + cx.neighbor_delta(k))] <= 0) == inside;
+  int chi = 0;
+  for (int k = 0; k < 14; ++k) chi += on[k];
+  for (const auto& e : link.edges) chi -= on[e[0]] && on[e[1]];
+  for (const auto& t : link.triangles) chi += on[t[0]] && on[t[1]] && on[t[2]];
+  return chi == 2;
+}
+
+// The pinch of the generator's side nearest the surface within two voxels of the saddle (ties: the smallest id).
+// A noise pair is born at its saddle, but at level 0 the vertices between its birth and the surface may have
+// made the saddle a simple point and moved the thin place next to it.
+MembraneVoxels nearby_pinch(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c) {
+  constexpr int kReach = 2;
+  MembraneVoxels out;
+  const bool inside = c.side == Side::Handle;
+  const auto sc = cx.coords(c.saddle);
+  Id best = -1;
+  float best_f = 0;
+  for (int dz = -kReach; dz <= kReach; ++dz)
+    for (int dy = -kReach; dy <= kReach; ++dy)
+      for (int dx = -kReach; dx <= kReach; ++dx) {
+        if (!cx.inside(sc[0] + dx, sc[1] + dy, sc[2] + dz)) continue;
+        const Id v = cx.vertex(sc[0] + dx, sc[1] + dy, sc[2] + dz);
+        const float f = std::abs(grid.values[std::size_t(v)]);
+        if ((grid.values[std::size_t(v)] <= 0) != inside || !pinches(grid, cx, v, inside)) continue;
+        if (best < 0 || f < best_f || (f == best_f && v < best)) best = v, best_f = f;
+      }
+  if (best < 0) {
+    out.note = "no pinch of its side within two voxels of the saddle";
+    return out;
+  }
+  out.shore = {best};
+  add_small_debris(grid, cx, out.shore, kSpeck);
+  out.found = true;
+  out.at_saddle = true;
+  return out;
+}
+
 }  // namespace
 
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape) {
@@ -231,6 +276,7 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
     return out;
   }
   if (shape == MembraneShape::LevelPiece) return level_piece(grid, cx, c);
+  if (shape == MembraneShape::NearbyPinch) return nearby_pinch(grid, cx, c);
   const double h = grid.voxel_size;
   const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
   int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;

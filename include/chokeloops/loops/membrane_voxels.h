@@ -26,8 +26,11 @@ struct MembraneVoxels {
 // triangle is in the solid only with all three), for pairs thinner than a voxel (noise), where neither closes.
 // LevelPiece: the saddle with the vertices joined to it between the surface and the pair's level (a handle's
 // birth <= f <= 0, a tunnel's 0 < f <= death) within a voxel of it, for noise pairs whose saddle alone is not
-// enough. Saddle and LevelPiece take along the specks (at most 8 vertices) that hung on them only.
-enum class MembraneShape { Sheet, Plane, Saddle, LevelPiece };
+// enough. NearbyPinch: the vertex of the generator's side within two voxels of the saddle, nearest the surface,
+// whose flip alone lowers that side's genus (its link on that side is two pieces): where a noise pair is thin at
+// level 0 when its saddle is not. Saddle, LevelPiece and NearbyPinch take along the specks (at most 8 vertices)
+// that hung on them only.
+enum class MembraneShape { Sheet, Plane, Saddle, LevelPiece, NearbyPinch };
 
 // The membrane of the choke, grown in boxes (LoopOptions::box_factor, box_margin) until it closes inside one.
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
