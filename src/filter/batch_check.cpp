@@ -169,14 +169,13 @@ Surroundings look_around(const ScalarGrid& grid, const FreudenthalComplex& cx, c
   return s;
 }
 
-// Whether `targets` (non-empty, all on the side `inside`) are joined by Freudenthal edges through vertices of
-// their side, searched within the box of the targets grown by `margin` voxels, on the grid as it is or, with
-// `before`, as it was before those changes: Yes when the search from the first target reaches them all; No when
-// a search (from the first, or from a target it missed) goes round its whole component without leaving the box
-// and without the others (a split); else Unknown.
+// Whether `targets` (non-empty, all of one side: `same_side` true on them) are joined by Freudenthal edges
+// through vertices of their side, searched within the box of the targets grown by `margin` voxels: Yes when the
+// search from the first target reaches them all; No when a search (from the first, or from a target it missed)
+// goes round its whole component without leaving the box and without the others (a split); else Unknown.
 enum class Joined { Yes, No, Unknown };
-Joined joined_in_box(const ScalarGrid& grid, const FreudenthalComplex& cx, const std::vector<Id>& targets, bool inside,
-                     const SideChanges* before, int margin) {
+template <class SameSide>
+Joined joined_in_box(const FreudenthalComplex& cx, const std::vector<Id>& targets, SameSide same_side, int margin) {
   const auto& d = cx.dims();
   std::array<int, 3> lo{d[0], d[1], d[2]}, hi{-1, -1, -1};
   for (Id v : targets) {
@@ -192,23 +191,8 @@ Joined joined_in_box(const ScalarGrid& grid, const FreudenthalComplex& cx, const
     return (std::size_t(c[2] - lo[2]) * std::size_t(size[1]) + std::size_t(c[1] - lo[1])) * std::size_t(size[0]) +
            std::size_t(c[0] - lo[0]);
   };
-  const std::size_t volume = std::size_t(size[0]) * std::size_t(size[1]) * std::size_t(size[2]);
-  auto in_box = [&](const std::array<int, 3>& c) {
-    return c[0] >= lo[0] && c[1] >= lo[1] && c[2] >= lo[2] && c[0] <= hi[0] && c[1] <= hi[1] && c[2] <= hi[2];
-  };
-  // The side before of the box's vertices that changed (1 outside, 2 inside), so that it costs no lookup.
-  std::vector<char> was;
-  if (before) {
-    was.assign(volume, 0);
-    for (const auto& [v, was_inside] : *before)
-      if (const auto c = cx.coords(v); in_box(c)) was[local(c)] = was_inside ? 2 : 1;
-  }
-  auto same_side = [&](Id u, std::size_t lu) {
-    if (before && was[lu]) return (was[lu] == 2) == inside;
-    return (grid.values[std::size_t(u)] <= 0) == inside;
-  };
   enum : char { kUnseen = 0, kTarget = 1, kFirst = 2, kSecond = 3 };
-  std::vector<char> state(volume, kUnseen);
+  std::vector<char> state(std::size_t(size[0]) * std::size_t(size[1]) * std::size_t(size[2]), kUnseen);
   for (Id v : targets) state[local(cx.coords(v))] = kTarget;
   // One search, marking what it reaches `mark`; how many targets it reached, whether it met a vertex marked
   // `meets` and whether it was stopped by the box.
@@ -231,24 +215,17 @@ Joined joined_in_box(const ScalarGrid& grid, const FreudenthalComplex& cx, const
         const bool in_grid = n[0] >= 0 && n[1] >= 0 && n[2] >= 0 && n[0] < d[0] && n[1] < d[1] && n[2] < d[2];
         if (!in_grid) continue;
         const Id u = v + cx.neighbor_delta(k);
-        if (!in_box(n)) {
-          // beyond the box: the side before is the side now unless the vertex changed
-          if (!r.clipped) {
-            bool side = grid.values[std::size_t(u)] <= 0;
-            if (before)
-              if (const auto it = before->find(u); it != before->end()) side = it->second;
-            r.clipped = side == inside;
-          }
+        if (n[0] < lo[0] || n[1] < lo[1] || n[2] < lo[2] || n[0] > hi[0] || n[1] > hi[1] || n[2] > hi[2]) {
+          r.clipped = r.clipped || same_side(u);
           continue;
         }
-        const std::size_t lu = local(n);
-        char& st = state[lu];
+        char& st = state[local(n)];
         if (st == mark) continue;
         if (st == meets && meets != kUnseen) {
           r.met = true;
           continue;
         }
-        if (!same_side(u, lu)) continue;
+        if (!same_side(u)) continue;
         if (st == kTarget) ++r.targets;
         st = mark;
         queue.push_back(u);
@@ -294,6 +271,11 @@ LocalVerdict judge_group_locally(const ScalarGrid& grid, const FreudenthalComple
   LocalVerdict out;
   out.verdict.on_border = s.on_border;
   out.verdict.euler_change = s.euler_change;
+  auto inside_after = [&](Id u) { return grid.values[std::size_t(u)] <= 0; };
+  auto inside_before = [&](Id u) {
+    const auto it = changes.find(u);
+    return it != changes.end() ? it->second : inside_after(u);
+  };
   // Each of the four sets joined within a small box, else a larger one; an empty set (no vertex of that side
   // around the group) fails at once.
   bool joined[2][2];
@@ -303,9 +285,13 @@ LocalVerdict judge_group_locally(const ScalarGrid& grid, const FreudenthalComple
       bool& j = joined[when][side];
       j = vs.size() == 1;
       if (vs.empty() || j) continue;  // empty fails, as in judge_group: no label at all
+      auto same = [&](Id u) {
+        const bool in = when == 0 ? inside_before(u) : inside_after(u);
+        return in == (side == 0);
+      };
       Joined verdict = Joined::Unknown;
       for (int margin : {2, 6, 16, 40})
-        if (verdict == Joined::Unknown) verdict = joined_in_box(grid, cx, vs, side == 0, when == 0 ? &changes : nullptr, margin);
+        if (verdict == Joined::Unknown) verdict = joined_in_box(cx, vs, same, margin);
       if (verdict == Joined::Unknown) return out;  // not settled here
       j = verdict == Joined::Yes;
     }
