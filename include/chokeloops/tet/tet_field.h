@@ -1,0 +1,33 @@
+#pragma once
+// The paper's complex: a TetGen tetrahedralization of a padded box around a closed mesh, the mesh's triangles
+// constrained facets kept as they are (-Y), so that the input surface is a subcomplex; the signed distance to
+// the mesh at every vertex (negative inside, 0 on the input's own vertices). The reference path beside the
+// grid engine (`--complex tetgen`): an independent triangulation, and the pipeline the paper timed.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "chokeloops/io/mesh_io.h"
+
+namespace chokeloops {
+
+struct TetOptions {
+  double radius_edge = 2.0;  // TetGen -q: largest radius-edge ratio of a tet (quality; > 1.1)
+  double max_volume = 0;     // TetGen -a: largest tet volume in input units cubed; 0 = none
+  double padding = 0.1;      // the box around the mesh, as a fraction of its bounding box's diagonal
+};
+
+struct TetField {
+  std::vector<std::array<double, 3>> vertices;  // the input's vertices first, in their order, then TetGen's
+  std::vector<std::array<std::int32_t, 4>> tets;
+  std::vector<double> values;                   // signed distance to the input surface, per vertex
+  std::vector<char> inside_tets;                // per tet: inside the input surface (winding number at its centroid)
+  std::int32_t input_vertices = 0;
+  double seconds_tetgen = 0, seconds_distance = 0;
+};
+
+// Throws Error (exit 2) for a mesh that is not closed and manifold, or that TetGen refuses (self-intersecting
+// or touching facets); exit 3 when TetGen runs out of memory.
+TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions& options = {});
+
+}  // namespace chokeloops

@@ -1,0 +1,160 @@
+#include "chokeloops/tet/tet_field.h"
+
+#define TETLIBRARY
+#include <tetgen.h>
+
+#include <tbb/parallel_for.h>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include "chokeloops/field/winding_number.h"
+#include "chokeloops/grid.h"
+
+namespace chokeloops {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Triangles = std::vector<K::Triangle_3>;
+using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+// TetGen needs a closed surface to tell its inside; every edge must be shared by exactly two triangles that
+// run it in opposite directions (closed, manifold along edges and consistently oriented).
+void require_closed_manifold(const TriangleMesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;  // (a, b) -> how many triangles run a -> b
+  for (const auto& f : mesh.faces)
+    for (int e = 0; e < 3; ++e) ++directed[{f[std::size_t(e)], f[std::size_t((e + 1) % 3)]}];
+  for (const auto& [edge, n] : directed) {
+    const auto opposite = directed.find({edge.second, edge.first});
+    const int back = opposite == directed.end() ? 0 : opposite->second;
+    if (n != 1 || back != 1) {
+      std::ostringstream s;
+      s << "--complex tetgen needs a closed, manifold, consistently oriented mesh: the edge between vertices "
+        << edge.first << " and " << edge.second << " has " << n << " triangle(s) one way and " << back
+        << " the other (repair the mesh, or use the default grid complex, which repairs it)";
+      throw Error(s.str());
+    }
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions& options) {
+  if (mesh.faces.empty()) throw Error("--complex tetgen: the mesh has no triangles");
+  if (!(options.radius_edge > 1.0)) throw Error("--tet-quality must be above 1 (TetGen's radius-edge ratio)");
+  if (options.max_volume < 0 || !std::isfinite(options.max_volume)) throw Error("--tet-max-volume must be >= 0");
+  require_closed_manifold(mesh);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& p : mesh.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double pad = options.padding * diagonal;
+  for (int a = 0; a < 3; ++a) lo[a] -= pad, hi[a] += pad;
+
+  // The input: the mesh's vertices, then the box's 8 corners; its triangles, then the box's 6 quads.
+  const int nv = int(mesh.vertices.size()), nf = int(mesh.faces.size());
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = nv + 8;
+  in.pointlist = new REAL[std::size_t(3) * std::size_t(nv + 8)];
+  for (int v = 0; v < nv; ++v)
+    for (int a = 0; a < 3; ++a) in.pointlist[3 * v + a] = mesh.vertices[std::size_t(v)][std::size_t(a)];
+  for (int c = 0; c < 8; ++c)
+    for (int a = 0; a < 3; ++a) in.pointlist[3 * (nv + c) + a] = (c >> a) & 1 ? hi[std::size_t(a)] : lo[std::size_t(a)];
+  static constexpr int kBoxQuads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  in.numberoffacets = nf + 6;
+  in.facetlist = new tetgenio::facet[std::size_t(nf + 6)];
+  for (int f = 0; f < nf + 6; ++f) {
+    tetgenio::facet& facet = in.facetlist[f];
+    tetgenio::init(&facet);
+    facet.numberofpolygons = 1;
+    facet.polygonlist = new tetgenio::polygon[1];
+    tetgenio::polygon& p = facet.polygonlist[0];
+    tetgenio::init(&p);
+    p.numberofvertices = f < nf ? 3 : 4;
+    p.vertexlist = new int[std::size_t(p.numberofvertices)];
+    for (int i = 0; i < p.numberofvertices; ++i)
+      p.vertexlist[i] = f < nf ? mesh.faces[std::size_t(f)][std::size_t(i)] : nv + kBoxQuads[f - nf][i];
+  }
+  // p: a PLC; q: quality; a: volume; Y: no Steiner point on the input's facets (the surface stays a subcomplex
+  // with the input's own edges); z: indices from 0; Q: quiet.
+  std::ostringstream sw;
+  sw << "pq" << options.radius_edge << "/0";
+  if (options.max_volume > 0) sw << "a" << options.max_volume;
+  sw << "YzQ";
+  std::string switches = sw.str();
+  tetgenbehavior behaviour;
+  if (!behaviour.parse_commandline(switches.data())) throw InternalError("TetGen refused the switches " + switches);
+  try {
+    tetrahedralize(&behaviour, &in, &out);
+  } catch (int code) {
+    if (code == 1) throw Error("TetGen ran out of memory: raise --tet-max-volume or lower the mesh's size", 3);
+    if (code == 3 || code == 4 || code == 5)
+      throw Error(std::string("TetGen refuses the mesh: ") +
+                  (code == 3 ? "it intersects itself" : code == 4 ? "a feature is too small for its precision"
+                                                                  : "two facets are too close") +
+                  " (repair it, or use the default grid complex)");
+    if (code == 10) throw Error("TetGen refuses the mesh as input (a degenerate or repeated triangle?)");
+    throw InternalError("TetGen failed with code " + std::to_string(code));
+  }
+  TetField field;
+  field.input_vertices = nv;
+  field.vertices.resize(std::size_t(out.numberofpoints));
+  for (int v = 0; v < out.numberofpoints; ++v)
+    field.vertices[std::size_t(v)] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  for (int v = 0; v < nv; ++v)  // -Y keeps the input's vertices first and where they were
+    if (field.vertices[std::size_t(v)] != mesh.vertices[std::size_t(v)])
+      throw InternalError("TetGen moved input vertex " + std::to_string(v));
+  if (out.numberofcorners != 4) throw InternalError("TetGen returned tets with " + std::to_string(out.numberofcorners) + " corners");
+  field.tets.resize(std::size_t(out.numberoftetrahedra));
+  for (int t = 0; t < out.numberoftetrahedra; ++t)
+    for (int i = 0; i < 4; ++i) field.tets[std::size_t(t)][std::size_t(i)] = out.tetrahedronlist[4 * t + i];
+  field.seconds_tetgen = seconds_since(t0);
+
+  // Distance from CGAL's AABB tree; sign from the winding number (1 inside a closed, outward mesh).
+  const auto t1 = std::chrono::steady_clock::now();
+  Triangles triangles;
+  triangles.reserve(std::size_t(nf));
+  auto point = [&](int v) {
+    const auto& p = mesh.vertices[std::size_t(v)];
+    return K::Point_3(p[0], p[1], p[2]);
+  };
+  for (const auto& f : mesh.faces) triangles.emplace_back(point(f[0]), point(f[1]), point(f[2]));
+  Tree tree(triangles.begin(), triangles.end());
+  tree.accelerate_distance_queries();
+  const WindingNumber winding(mesh);
+  field.values.assign(field.vertices.size(), 0.0);
+  tbb::parallel_for(std::size_t(nv), field.vertices.size(), [&](std::size_t v) {
+    const auto& p = field.vertices[v];
+    const double d = std::sqrt(tree.squared_distance(K::Point_3(p[0], p[1], p[2])));
+    field.values[v] = std::abs(winding(p)) > 0.5 ? -d : d;
+  });
+  field.inside_tets.assign(field.tets.size(), 0);
+  tbb::parallel_for(std::size_t(0), field.tets.size(), [&](std::size_t t) {
+    std::array<double, 3> c{0, 0, 0};
+    for (std::int32_t v : field.tets[t])
+      for (int a = 0; a < 3; ++a) c[std::size_t(a)] += 0.25 * field.vertices[std::size_t(v)][std::size_t(a)];
+    field.inside_tets[t] = std::abs(winding(c)) > 0.5;
+  });
+  field.seconds_distance = seconds_since(t1);
+  return field;
+}
+
+}  // namespace chokeloops
