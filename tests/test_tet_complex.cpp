@@ -18,6 +18,8 @@
 #include "chokeloops/tet/tet_persistence.h"
 #include "chokeloops/topology/persistence.h"
 
+using chokeloops::Sdf;
+
 using namespace chokeloops;
 
 namespace {
@@ -72,9 +74,7 @@ TEST(TetPersistence, EqualsTheGridEngineOnItsOwnTriangulationOfARoughField) {
   EXPECT_EQ(tet.simplices[3], std::int64_t(13 * 11 * 9 * 6));
 }
 
-// Depths are not compared yet: with TetGen's default quality the interior has few vertices, so births are
-// shallower than the grid's (genus3's deepest handle: -0.041 against -0.060 at 128^3; some handles are born at 0).
-TEST(TetComplex, MeshesHaveAsManyGenusPairsAsTheGridPath) {
+TEST(TetComplex, MeshesHaveAsManyGenusPairsAsTheGridPathWithTheDeepestHandleWithinTwoVoxels) {
   const std::string data = std::string(CHOKELOOPS_DATA) + "/meshes/";
   for (const auto& [file, genus] : {std::pair<std::string, int>{"genus3_directional.off", 3}, {"kitten_euclid.off", 1}}) {
     SCOPED_TRACE(file);
@@ -83,17 +83,46 @@ TEST(TetComplex, MeshesHaveAsManyGenusPairsAsTheGridPath) {
     lo.resolution = 128;
     lo.quiet = true;
     const LevelSetResult grid = mesh_to_levelset(mesh, lo, file);
+    double grid_deepest = 0;
     int grid_pairs = 0;
-    for (const auto& p : lower_star_persistence(grid.grid).pairs) grid_pairs += p.dim == 1 && p.birth <= 0 && p.death > 0;
+    for (const auto& p : lower_star_persistence(grid.grid).pairs)
+      if (p.dim == 1 && p.birth <= 0 && p.death > 0) ++grid_pairs, grid_deepest = std::max(grid_deepest, double(-p.birth));
     const TetField field = tetrahedralize_with_distance(mesh);
     const auto pairs = genus_pairs(tet_lower_star_persistence(std::int32_t(field.vertices.size()), field.tets, field.values, &field.inside_tets));
     EXPECT_EQ(grid_pairs, genus);
     EXPECT_EQ(int(pairs.size()), genus);
-    for (const auto& p : pairs) EXPECT_LE(p.birth, 0);  // 0: a handle with no tet vertex inside it deeper than the surface
-    // Without the solid's tets marked, simplices outside it with every vertex on the surface join level 0.
-    const auto unmarked = genus_pairs(tet_lower_star_persistence(std::int32_t(field.vertices.size()), field.tets, field.values));
-    EXPECT_GT(int(unmarked.size()), genus);
+    double deepest = 0;
+    for (const auto& p : pairs) deepest = std::max(deepest, -p.birth);
+    EXPECT_NEAR(deepest, grid_deepest, 2 * grid.grid.voxel_size);
   }
+}
+
+TEST(TetComplex, TorusDepthsAreItsRadiiWithinTwoVoxelsOfTheGridRun) {
+  // Tube radius 0.1 (the handle's depth), hole radius 0.2 (the tunnel's); the grid run at 96^3.
+  const Sdf torus = analytic::torus(0.3, 0.1);
+  const ScalarGrid fine = sample_field({96, 96, 96}, torus);
+  std::vector<PersistencePair> grid;
+  for (const auto& p : lower_star_persistence(fine).pairs)
+    if (p.dim == 1 && p.birth <= 0 && p.death > 0) grid.push_back(p);
+  ASSERT_EQ(grid.size(), 1u);
+  const TetField field = tetrahedralize_with_distance(mesh_of(extract_zero_surface(sample_field({40, 40, 40}, torus))));
+  const auto pairs = genus_pairs(tet_lower_star_persistence(std::int32_t(field.vertices.size()), field.tets, field.values, &field.inside_tets));
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_NEAR(-pairs[0].birth, -grid[0].birth, 2 * fine.voxel_size);
+  EXPECT_NEAR(pairs[0].death, grid[0].death, 2 * fine.voxel_size);
+  EXPECT_NEAR(-pairs[0].birth, 0.1, 0.02);
+  EXPECT_NEAR(pairs[0].death, 0.2, 0.02);
+}
+
+TEST(TetComplex, SimplicesOutsideWithEveryVertexOnTheSurfaceEnterAfterLevelZero) {
+  // No interior points: most tets have all their vertices on the surface. Taken at 0 with the solid, those
+  // outside it close and open loops that the solid does not have.
+  TetOptions o;
+  o.spacing = 1e9;
+  const TetField field = tetrahedralize_with_distance(read_mesh(std::string(CHOKELOOPS_DATA) + "/meshes/kitten_euclid.off"), o);
+  const std::int32_t n = std::int32_t(field.vertices.size());
+  EXPECT_EQ(genus_pairs(tet_lower_star_persistence(n, field.tets, field.values, &field.inside_tets)).size(), 1u);
+  EXPECT_NE(genus_pairs(tet_lower_star_persistence(n, field.tets, field.values)).size(), 1u);
 }
 
 TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {

@@ -56,7 +56,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions& options) {
   if (mesh.faces.empty()) throw Error("--complex tetgen: the mesh has no triangles");
-  if (!(options.radius_edge > 1.0)) throw Error("--tet-quality must be above 1 (TetGen's radius-edge ratio)");
+  if (options.radius_edge != 0 && !(options.radius_edge > 1.0))
+    throw Error("--tet-quality must be above 1 (TetGen's radius-edge ratio), or 0 for none");
+  if (options.spacing < 0 || !std::isfinite(options.spacing)) throw Error("--tet-spacing must be >= 0");
   if (options.max_volume < 0 || !std::isfinite(options.max_volume)) throw Error("--tet-max-volume must be >= 0");
   require_closed_manifold(mesh);
   const auto t0 = std::chrono::steady_clock::now();
@@ -68,16 +70,52 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   const double pad = options.padding * diagonal;
   for (int a = 0; a < 3; ++a) lo[a] -= pad, hi[a] += pad;
 
-  // The input: the mesh's vertices, then the box's 8 corners; its triangles, then the box's 6 quads.
   const int nv = int(mesh.vertices.size()), nf = int(mesh.faces.size());
+  Triangles triangles;
+  triangles.reserve(std::size_t(nf));
+  auto point = [&](int v) {
+    const auto& p = mesh.vertices[std::size_t(v)];
+    return K::Point_3(p[0], p[1], p[2]);
+  };
+  for (const auto& f : mesh.faces) triangles.emplace_back(point(f[0]), point(f[1]), point(f[2]));
+  Tree tree(triangles.begin(), triangles.end());
+  tree.accelerate_distance_queries();
+  const WindingNumber winding(mesh);
+
+  // Points inside and outside where the function is sampled: a lattice over the box (the grid path's samples, in
+  // effect), less those nearer the surface than half its spacing, where they would only make slivers.
+  const double h = options.spacing > 0 ? options.spacing : diagonal / options.default_cells;
+  std::array<int, 3> cells;
+  double lattice_points = 1;
+  for (int a = 0; a < 3; ++a) cells[std::size_t(a)] = std::max(1, int(std::floor((hi[std::size_t(a)] - lo[std::size_t(a)]) / h))),
+                              lattice_points *= cells[std::size_t(a)] - 1;
+  if (lattice_points > 2e8) throw Error("--tet-spacing is too fine: " + std::to_string(std::int64_t(lattice_points)) + " interior points", 3);
+  std::vector<std::array<double, 3>> extra;
+  for (int k = 1; k < cells[2]; ++k)
+    for (int j = 1; j < cells[1]; ++j)
+      for (int i = 1; i < cells[0]; ++i) extra.push_back({lo[0] + i * h, lo[1] + j * h, lo[2] + k * h});
+  std::vector<char> keep(extra.size());
+  tbb::parallel_for(std::size_t(0), extra.size(), [&](std::size_t e) {
+    const auto& p = extra[e];
+    keep[e] = tree.squared_distance(K::Point_3(p[0], p[1], p[2])) >= 0.25 * h * h;
+  });
+  std::size_t kept = 0;
+  for (std::size_t e = 0; e < extra.size(); ++e)
+    if (keep[e]) extra[kept++] = extra[e];
+  extra.resize(kept);
+
+  // The input: the mesh's vertices, the box's 8 corners, the lattice; its triangles, then the box's 6 quads.
   tetgenio in, out;
   in.firstnumber = 0;
-  in.numberofpoints = nv + 8;
-  in.pointlist = new REAL[std::size_t(3) * std::size_t(nv + 8)];
+  const int n_points = nv + 8 + int(extra.size());
+  in.numberofpoints = n_points;
+  in.pointlist = new REAL[std::size_t(3) * std::size_t(n_points)];
   for (int v = 0; v < nv; ++v)
     for (int a = 0; a < 3; ++a) in.pointlist[3 * v + a] = mesh.vertices[std::size_t(v)][std::size_t(a)];
   for (int c = 0; c < 8; ++c)
     for (int a = 0; a < 3; ++a) in.pointlist[3 * (nv + c) + a] = (c >> a) & 1 ? hi[std::size_t(a)] : lo[std::size_t(a)];
+  for (std::size_t e = 0; e < extra.size(); ++e)
+    for (int a = 0; a < 3; ++a) in.pointlist[3 * (std::size_t(nv) + 8 + e) + std::size_t(a)] = extra[e][std::size_t(a)];
   static constexpr int kBoxQuads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   in.numberoffacets = nf + 6;
   in.facetlist = new tetgenio::facet[std::size_t(nf + 6)];
@@ -96,7 +134,8 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   // p: a PLC; q: quality; a: volume; Y: no Steiner point on the input's facets (the surface stays a subcomplex
   // with the input's own edges); z: indices from 0; Q: quiet.
   std::ostringstream sw;
-  sw << "pq" << options.radius_edge << "/0";
+  sw << "p";
+  if (options.radius_edge > 0) sw << "q" << options.radius_edge;
   if (options.max_volume > 0) sw << "a" << options.max_volume;
   sw << "YzQ";
   std::string switches = sw.str();
@@ -130,16 +169,6 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
 
   // Distance from CGAL's AABB tree; sign from the winding number (1 inside a closed, outward mesh).
   const auto t1 = std::chrono::steady_clock::now();
-  Triangles triangles;
-  triangles.reserve(std::size_t(nf));
-  auto point = [&](int v) {
-    const auto& p = mesh.vertices[std::size_t(v)];
-    return K::Point_3(p[0], p[1], p[2]);
-  };
-  for (const auto& f : mesh.faces) triangles.emplace_back(point(f[0]), point(f[1]), point(f[2]));
-  Tree tree(triangles.begin(), triangles.end());
-  tree.accelerate_distance_queries();
-  const WindingNumber winding(mesh);
   field.values.assign(field.vertices.size(), 0.0);
   tbb::parallel_for(std::size_t(nv), field.vertices.size(), [&](std::size_t v) {
     const auto& p = field.vertices[v];

@@ -11,10 +11,15 @@
 
 namespace chokeloops {
 
+// Where the function is sampled decides the depths' accuracy, as the voxel does on the grid. TetGen's own
+// refinement (-q, -a) keeping the input surface (-Y) is slow (24 s for 155K tets on a 12K-vertex torus) and with
+// -q can run without end on a mesh of thin triangles, so the default samples a lattice of points instead.
 struct TetOptions {
-  double radius_edge = 2.0;  // TetGen -q: largest radius-edge ratio of a tet (quality; > 1.1)
-  double max_volume = 0;     // TetGen -a: largest tet volume in input units cubed; 0 = none
-  double padding = 0.1;      // the box around the mesh, as a fraction of its bounding box's diagonal
+  double spacing = 0;          // lattice of interior points, input units; 0: the box's diagonal / default_cells
+  double default_cells = 64;
+  double radius_edge = 0;      // TetGen -q: largest radius-edge ratio of a tet (> 1; 0: no -q)
+  double max_volume = 0;       // TetGen -a: largest tet volume in input units cubed; 0: no -a
+  double padding = 0.1;        // the box around the mesh, as a fraction of its bounding box's diagonal
 };
 
 struct TetField {
