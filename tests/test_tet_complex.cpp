@@ -135,4 +135,17 @@ TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {
     EXPECT_NE(std::string(e.what()).find("closed, manifold"), std::string::npos) << e.what();
   }
 }
+
+TEST(TetComplex, SelfIntersectingMeshIsRefusedBeforeTetGenSeesIt) {
+  // Two closed tetrahedra, the second's apex through the first's base.
+  TriangleMesh m{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, -0.5}, {1.2, 0.2, -0.5}, {0.2, 1.2, -0.5}, {0.2, 0.2, 0.5}},
+                 {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 6, 5}, {4, 5, 7}, {4, 7, 6}, {5, 6, 7}}};
+  try {
+    tetrahedralize_with_distance(m);
+    FAIL() << "a self-intersecting mesh was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find("intersects itself"), std::string::npos) << e.what();
+  }
+}
 #endif

@@ -3,16 +3,23 @@
 #define TETLIBRARY
 #include <tetgen.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <tbb/parallel_for.h>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <sstream>
 #include <string>
@@ -48,6 +55,103 @@ void require_closed_manifold(const TriangleMesh& mesh) {
   }
 }
 
+// CGAL finds the first pair of intersecting triangles; TetGen would fail on them (and see below).
+void require_no_self_intersection(const TriangleMesh& mesh) {
+  CGAL::Surface_mesh<K::Point_3> sm;
+  for (const auto& p : mesh.vertices) sm.add_vertex(K::Point_3(p[0], p[1], p[2]));
+  for (const auto& f : mesh.faces) {
+    using VI = CGAL::Surface_mesh<K::Point_3>::Vertex_index;
+    if (sm.add_face(VI(std::uint32_t(f[0])), VI(std::uint32_t(f[1])), VI(std::uint32_t(f[2]))) == sm.null_face())
+      throw Error("--complex tetgen: the mesh is not manifold at a vertex (CGAL could not add a triangle); repair it, or use the default grid complex");
+  }
+  if (CGAL::Polygon_mesh_processing::does_self_intersect(sm))
+    throw Error("--complex tetgen: the mesh intersects itself (CGAL); repair it, or use the default grid complex, which tolerates it");
+}
+
+// TetGen 1.5.0 frees its memory twice when it stops on an error (terminatetetgen, then ~tetgenmesh while the code
+// it throws unwinds): the process crashes. So it runs in a child process, which hands back the vertices and tets
+// through a pipe, or the error code, or dies alone.
+struct TetgenResult {
+  std::vector<double> points;       // x y z per vertex
+  std::vector<std::int32_t> tets;   // 4 per tet
+};
+
+void write_all(int fd, const void* data, std::size_t bytes) {
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::write(fd, p, bytes);
+    if (n <= 0) _exit(5);
+    p += n, bytes -= std::size_t(n);
+  }
+}
+
+TetgenResult tetrahedralize_in_child(tetgenio& in, std::string switches) {
+  int fd[2];
+  if (pipe(fd) != 0) throw Error("--complex tetgen: could not open a pipe to TetGen's process", 3);
+  const pid_t pid = fork();
+  if (pid < 0) throw Error("--complex tetgen: could not start TetGen's process (fork)", 3);
+  if (pid == 0) {
+    close(fd[0]);
+    std::int64_t header[3] = {0, 0, 0};  // error code, points, tets
+    tetgenio out;
+    try {
+      tetgenbehavior behaviour;
+      if (!behaviour.parse_commandline(switches.data())) header[0] = -1;
+      else tetrahedralize(&behaviour, &in, &out);
+    } catch (int code) {
+      header[0] = code;
+    } catch (...) {
+      header[0] = 2;
+    }
+    if (header[0] == 0) header[1] = out.numberofpoints, header[2] = out.numberoftetrahedra;
+    if (header[0] == 0 && out.numberofcorners != 4) header[0] = -2;
+    write_all(fd[1], header, sizeof header);
+    if (header[0] == 0) {
+      write_all(fd[1], out.pointlist, sizeof(REAL) * 3 * std::size_t(header[1]));
+      std::vector<std::int32_t> tets(out.tetrahedronlist, out.tetrahedronlist + 4 * header[2]);
+      write_all(fd[1], tets.data(), sizeof(std::int32_t) * tets.size());
+    }
+    close(fd[1]);
+    _exit(0);
+  }
+  close(fd[1]);
+  std::vector<char> bytes;
+  char buffer[1 << 16];
+  for (ssize_t n; (n = ::read(fd[0], buffer, sizeof buffer)) != 0;) {
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      break;
+    }
+    bytes.insert(bytes.end(), buffer, buffer + n);
+  }
+  close(fd[0]);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  std::int64_t header[3] = {0, 0, 0};
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || bytes.size() < sizeof header)
+    throw Error("--complex tetgen: TetGen's process died (signal " + std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0) +
+                "), as TetGen 1.5.0 does after an error on touching or nearly touching facets; repair the mesh, or use the "
+                "default grid complex");
+  std::memcpy(header, bytes.data(), sizeof header);
+  const int code = int(header[0]);
+  if (code == 1) throw Error("TetGen ran out of memory: use a coarser --tet-spacing", 3);
+  if (code == 3 || code == 4 || code == 5)
+    throw Error(std::string("TetGen refuses the mesh: ") +
+                (code == 3 ? "it intersects itself" : code == 4 ? "a feature is too small for its precision" : "two facets are too close") +
+                " (repair it, or use the default grid complex)");
+  if (code == 10) throw Error("TetGen refuses the mesh as input (a degenerate or repeated triangle?)");
+  if (code != 0) throw InternalError("TetGen failed with code " + std::to_string(code) + " (switches " + switches + ")");
+  TetgenResult r;
+  const std::size_t point_bytes = sizeof(double) * 3 * std::size_t(header[1]), tet_bytes = sizeof(std::int32_t) * 4 * std::size_t(header[2]);
+  if (bytes.size() != sizeof header + point_bytes + tet_bytes) throw InternalError("TetGen's process returned a truncated mesh");
+  r.points.resize(3 * std::size_t(header[1]));
+  r.tets.resize(4 * std::size_t(header[2]));
+  std::memcpy(r.points.data(), bytes.data() + sizeof header, point_bytes);
+  std::memcpy(r.tets.data(), bytes.data() + sizeof header + point_bytes, tet_bytes);
+  return r;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -61,6 +165,7 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   if (options.spacing < 0 || !std::isfinite(options.spacing)) throw Error("--tet-spacing must be >= 0");
   if (options.max_volume < 0 || !std::isfinite(options.max_volume)) throw Error("--tet-max-volume must be >= 0");
   require_closed_manifold(mesh);
+  require_no_self_intersection(mesh);
   const auto t0 = std::chrono::steady_clock::now();
   std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (const auto& p : mesh.vertices)
@@ -105,7 +210,7 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   extra.resize(kept);
 
   // The input: the mesh's vertices, the box's 8 corners, the lattice; its triangles, then the box's 6 quads.
-  tetgenio in, out;
+  tetgenio in;
   in.firstnumber = 0;
   const int n_points = nv + 8 + int(extra.size());
   in.numberofpoints = n_points;
@@ -138,33 +243,18 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   if (options.radius_edge > 0) sw << "q" << options.radius_edge;
   if (options.max_volume > 0) sw << "a" << options.max_volume;
   sw << "YzQ";
-  std::string switches = sw.str();
-  tetgenbehavior behaviour;
-  if (!behaviour.parse_commandline(switches.data())) throw InternalError("TetGen refused the switches " + switches);
-  try {
-    tetrahedralize(&behaviour, &in, &out);
-  } catch (int code) {
-    if (code == 1) throw Error("TetGen ran out of memory: raise --tet-max-volume or lower the mesh's size", 3);
-    if (code == 3 || code == 4 || code == 5)
-      throw Error(std::string("TetGen refuses the mesh: ") +
-                  (code == 3 ? "it intersects itself" : code == 4 ? "a feature is too small for its precision"
-                                                                  : "two facets are too close") +
-                  " (repair it, or use the default grid complex)");
-    if (code == 10) throw Error("TetGen refuses the mesh as input (a degenerate or repeated triangle?)");
-    throw InternalError("TetGen failed with code " + std::to_string(code));
-  }
+  const TetgenResult out = tetrahedralize_in_child(in, sw.str());
   TetField field;
   field.input_vertices = nv;
-  field.vertices.resize(std::size_t(out.numberofpoints));
-  for (int v = 0; v < out.numberofpoints; ++v)
-    field.vertices[std::size_t(v)] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  field.vertices.resize(out.points.size() / 3);
+  for (std::size_t v = 0; v < field.vertices.size(); ++v)
+    field.vertices[v] = {out.points[3 * v], out.points[3 * v + 1], out.points[3 * v + 2]};
   for (int v = 0; v < nv; ++v)  // -Y keeps the input's vertices first and where they were
     if (field.vertices[std::size_t(v)] != mesh.vertices[std::size_t(v)])
       throw InternalError("TetGen moved input vertex " + std::to_string(v));
-  if (out.numberofcorners != 4) throw InternalError("TetGen returned tets with " + std::to_string(out.numberofcorners) + " corners");
-  field.tets.resize(std::size_t(out.numberoftetrahedra));
-  for (int t = 0; t < out.numberoftetrahedra; ++t)
-    for (int i = 0; i < 4; ++i) field.tets[std::size_t(t)][std::size_t(i)] = out.tetrahedronlist[4 * t + i];
+  field.tets.resize(out.tets.size() / 4);
+  for (std::size_t t = 0; t < field.tets.size(); ++t)
+    for (int i = 0; i < 4; ++i) field.tets[t][std::size_t(i)] = out.tets[4 * t + std::size_t(i)];
   field.seconds_tetgen = seconds_since(t0);
 
   // Distance from CGAL's AABB tree; sign from the winding number (1 inside a closed, outward mesh).
