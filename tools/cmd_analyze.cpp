@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cctype>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -11,6 +13,9 @@
 #include "chokeloops/analyze.h"
 #include "chokeloops/analyze_molecule.h"
 #include "chokeloops/output/view.h"
+#ifdef CHOKELOOPS_HAS_TETGEN
+#include "chokeloops/tet/analyze_tet.h"
+#endif
 #include "analyze_volume_cli.h"
 #include "args.h"
 #include "command.h"
@@ -35,6 +40,11 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
                             R_out (tunnels), e.g. 50%, or a length in input units (default 50%)
   --min-persistence Y       minimum persistence of additional loops, same units (default 10%)
   --side handle|tunnel|both which loops to report (default both)
+  --complex grid|tetgen     grid (default): the engine's implicit complex; tetgen: a closed, manifold mesh's
+                            TetGen tetrahedralization (the paper's pipeline, a reference): chokes.csv and
+                            the chokes table, no loops yet
+  --tet-spacing H           tetgen: spacing of the interior sample points, input units (default: the box's
+                            diagonal / 64)
   --threads N               worker threads (default: all cores); results do not depend on it
   --max-memory BYTES        refuse grids needing more (e.g. 8G; default 80% of RAM)
   --png FILE                also render a picture of the surface and its loops (needs chromium)
@@ -104,6 +114,46 @@ class Progress {
   std::string last_;
 };
 
+// --complex tetgen: the chokes from TetGen's complex of a closed mesh (analyze_tet.h).
+int run_tetgen(const std::string& input, const std::string& outdir, double spacing, const ChokeParameters& params, bool grid_flags) {
+#ifdef CHOKELOOPS_HAS_TETGEN
+  if (grid_flags) throw Error("--resolution applies to the grid complex; --complex tetgen takes --tet-spacing");
+  const std::size_t dot = input.rfind('.');
+  std::string ext = dot == std::string::npos ? "" : input.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const auto& meshes = mesh_extensions();
+  if (std::find(meshes.begin(), meshes.end(), ext) == meshes.end())
+    throw Error("--complex tetgen takes a mesh (.obj .ply .off .stl): " + input);
+  const auto t0 = std::chrono::steady_clock::now();
+  const TriangleMesh mesh = read_mesh(input);
+  TetOptions tet;
+  tet.spacing = spacing;
+  const TetAnalysis a = analyze_tet_complex(mesh, tet, params);
+  std::error_code ec;
+  std::filesystem::create_directories(outdir, ec);
+  if (ec || !std::filesystem::is_directory(outdir)) throw Error("cannot create output directory '" + outdir + "': " + ec.message());
+  write_chokes_csv(a.chokes, outdir + "/chokes.csv");
+  const ChokeSet& c = a.chokes;
+  int chokes[2] = {0, 0};
+  for (const Choke& k : c.chokes) chokes[k.side == Side::Tunnel] += k.kind == Kind::Choke;
+  std::printf("%s: complex tetgen, %lld vertices, %lld tets (%zu input vertices), genus %d, %d component(s)\n", input.c_str(),
+              (long long)a.vertices, (long long)a.tets, mesh.vertices.size(), c.handle_generators, c.components);
+  std::printf("handle loops: %d generator(s), %d choke(s)   tunnel loops: %d generator(s), %d choke(s)   (not traced on this complex)\n",
+              c.handle_generators, chokes[0], c.tunnel_generators, chokes[1]);
+  for (const Choke& k : c.chokes)
+    std::printf("  %s %s: depth %.5g, persistence %.4g at (%.4g, %.4g, %.4g)\n", to_string(k.side), to_string(k.kind), k.depth,
+                k.persistence, k.point[0], k.point[1], k.point[2]);
+  const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("time: tetgen %.0f ms, distance %.0f ms, persistence %.0f ms, chokes %.0f ms, total %.0f ms\n", a.timings_ms.at("tetgen"),
+              a.timings_ms.at("distance"), a.timings_ms.at("persistence"), a.timings_ms.at("chokes"), total);
+  std::printf("wrote %s/chokes.csv\n", outdir.c_str());
+  return 0;
+#else
+  (void)input, (void)outdir, (void)spacing, (void)params, (void)grid_flags;
+  throw Error("--complex tetgen: this build leaves TetGen out (CHOKELOOPS_TETGEN=OFF)");
+#endif
+}
+
 int run(std::vector<std::string> args) {
   AnalyzeOptions options;
   MoleculeOptions molecule;
@@ -113,6 +163,8 @@ int run(std::vector<std::string> args) {
   int threads = 0;
   cli::VolumeCliOptions vo;
   bool max_loops_given = false;
+  bool tetgen = false;
+  double tet_spacing = 0;
   cli::Args in("analyze", std::move(args));
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
@@ -161,6 +213,13 @@ int run(std::vector<std::string> args) {
       if (v != "handle" && v != "tunnel" && v != "both") throw Error("--side must be handle, tunnel or both");
       options.chokes.handles = v != "tunnel";
       options.chokes.tunnels = v != "handle";
+    } else if (in.is("--complex")) {
+      const std::string v = in.value();
+      if (v != "grid" && v != "tetgen") throw Error("--complex must be grid or tetgen (" + in.see_help() + ")");
+      tetgen = v == "tetgen";
+    } else if (in.is("--tet-spacing")) {
+      tet_spacing = in.number();
+      if (!(tet_spacing > 0)) throw Error("--tet-spacing must be positive (" + in.see_help() + ")");
     } else if (in.is("--threads")) threads = in.threads();
     else if (in.is("--max-memory")) options.levelset.max_memory = parse_bytes(in.value());
     else if (in.is("--png")) png = in.value();
@@ -193,6 +252,8 @@ int run(std::vector<std::string> args) {
   auto limit = cli::limit_threads(threads);
 
   Progress progress(quiet);
+  if (tetgen) return run_tetgen(input, outdir, tet_spacing, options.chokes, !grid_flags.empty() || options.resolution_auto);
+  if (tet_spacing > 0) throw Error("--tet-spacing applies to --complex tetgen only");
   if (is_molecule_path(input)) {
     if (!grid_flags.empty() || options.resolution_auto)
       throw Error("--resolution does not apply to molecules; use --voxel-size in Å (" + std::string("see chokeloops analyze --help") + ")");

@@ -5,6 +5,8 @@
 #include <phat/compute_persistence_pairs.h>
 #include <phat/representations/default_representations.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -82,7 +84,9 @@ TetDiagram tet_lower_star_persistence(std::int32_t vertex_count, const std::vect
   // With the solid given, a simplex outside it whose vertices are all at or below 0 (all on the surface: a
   // simplex with a vertex strictly inside lies inside, the surface being a subcomplex) enters just after level
   // 0, at "0+": else it would join the solid's sublevel set. The filtration: by where a simplex enters (twice its
-  // highest rank; 2 z - 1 for "0+", z the count of vertices at or below 0), then dim, then key.
+  // highest rank; 2 z - 1 for "0+", z the count of vertices at or below 0), then key: within one entry point the
+  // keys' order is a filtration too (a "0+" simplex's faces are in the solid, earlier, or "0+" and smaller). The
+  // keys being sorted, that order is a stable partition: those below z not at "0+", those at "0+", the rest.
   const std::int32_t z = std::int32_t(std::upper_bound(by_rank.begin(), by_rank.end(), 0.0, [&](double x, std::int32_t v) {
                                         return x < values[std::size_t(v)];
                                       }) - by_rank.begin());
@@ -91,39 +95,47 @@ TetDiagram tet_lower_star_persistence(std::int32_t vertex_count, const std::vect
   if (inside_tets)
     for (std::size_t i = 0; i < keys.size(); ++i) at_zero_plus[i] = !in_solid[i] && keys[i][0] < z;
   auto enters = [&](std::size_t i) { return at_zero_plus[i] ? 2 * std::int64_t(z) - 1 : 2 * std::int64_t(keys[i][0]); };
-  std::vector<std::int64_t> order(keys.size());  // filtration position -> key index
-  std::iota(order.begin(), order.end(), 0);
-  tbb::parallel_sort(order.begin(), order.end(), [&](std::int64_t a, std::int64_t b) {
-    const auto ea = enters(std::size_t(a)), eb = enters(std::size_t(b));
-    if (ea != eb) return ea < eb;
-    const int da = dim_of(keys[std::size_t(a)]), db = dim_of(keys[std::size_t(b)]);
-    return da != db ? da < db : a < b;
-  });
+  std::vector<std::int64_t> order;  // filtration position -> key index
+  order.reserve(keys.size());
+  const std::size_t below_z = std::size_t(std::lower_bound(keys.begin(), keys.end(), Key{z, -1, -1, -1}) - keys.begin());
+  for (std::size_t i = 0; i < below_z; ++i)
+    if (!at_zero_plus[i]) order.push_back(std::int64_t(i));
+  for (std::size_t i = 0; i < below_z; ++i)
+    if (at_zero_plus[i]) order.push_back(std::int64_t(i));
+  for (std::size_t i = below_z; i < keys.size(); ++i) order.push_back(std::int64_t(i));
   std::vector<phat::index> position(keys.size());
   for (std::size_t p = 0; p < order.size(); ++p) position[std::size_t(order[p])] = phat::index(p);
+  // A face is searched among the keys of its highest vertex only (a contiguous range of the sorted keys).
+  std::vector<std::int64_t> first_of(std::size_t(vertex_count) + 1, 0);
+  for (std::size_t i = keys.size(); i-- > 0;) first_of[std::size_t(keys[i][0])] = std::int64_t(i);
+  first_of[std::size_t(vertex_count)] = std::int64_t(keys.size());
   auto index_of = [&](const Key& k) {
-    const auto it = std::lower_bound(keys.begin(), keys.end(), k);
-    if (it == keys.end() || *it != k) throw InternalError("tet persistence: a face of a simplex is missing");
+    const auto lo = keys.begin() + first_of[std::size_t(k[0])], hi = keys.begin() + first_of[std::size_t(k[0]) + 1];
+    const auto it = std::lower_bound(lo, hi, k);
+    if (it == hi || *it != k) throw InternalError("tet persistence: a face of a simplex is missing");
     return position[std::size_t(it - keys.begin())];
   };
-  phat::boundary_matrix<phat::bit_tree_pivot_column> matrix;
-  matrix.set_num_cols(phat::index(keys.size()));
-  std::vector<phat::index> column;
-  for (std::size_t p = 0; p < order.size(); ++p) {
-    const Key& k = keys[std::size_t(order[p])];
-    const int d = dim_of(k);
-    ++diagram.simplices[std::size_t(d)];
-    matrix.set_dim(phat::index(p), phat::dimension(d));
-    column.clear();
-    for (int drop = 0; d > 0 && drop <= d; ++drop) {
-      Key face{-1, -1, -1, -1};
-      for (int j = 0, n = 0; j <= d; ++j)
-        if (j != drop) face[std::size_t(n++)] = k[std::size_t(j)];
-      column.push_back(index_of(face));
+  std::vector<std::vector<phat::index>> columns(keys.size());
+  std::vector<phat::dimension> dims(keys.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) {
+      const Key& k = keys[std::size_t(order[p])];
+      const int d = dim_of(k);
+      dims[p] = phat::dimension(d);
+      std::vector<phat::index>& column = columns[p];
+      for (int drop = 0; d > 0 && drop <= d; ++drop) {
+        Key face{-1, -1, -1, -1};
+        for (int j = 0, n = 0; j <= d; ++j)
+          if (j != drop) face[std::size_t(n++)] = k[std::size_t(j)];
+        column.push_back(index_of(face));
+      }
+      std::sort(column.begin(), column.end());
     }
-    std::sort(column.begin(), column.end());
-    matrix.set_col(phat::index(p), column);
-  }
+  });
+  for (phat::dimension d : dims) ++diagram.simplices[std::size_t(d)];
+  phat::boundary_matrix<phat::bit_tree_pivot_column> matrix;
+  matrix.load_vector_vector(columns, dims);
+  std::vector<std::vector<phat::index>>().swap(columns);
   diagram.seconds_build = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   phat::persistence_pairs pairs;
@@ -137,6 +149,12 @@ TetDiagram tet_lower_star_persistence(std::int32_t vertex_count, const std::vect
     return at_zero_plus[i] ? zero_plus : values[std::size_t(by_rank[std::size_t(keys[i][0])])];
   };
   auto vertex_of = [&](phat::index p) { return by_rank[std::size_t(keys[std::size_t(order[std::size_t(p)])][0])]; };
+  auto simplex_of = [&](phat::index p) {
+    std::array<std::int32_t, 4> vs{-1, -1, -1, -1};
+    const Key& k = keys[std::size_t(order[std::size_t(p)])];
+    for (int j = 0; j < 4 && k[std::size_t(j)] >= 0; ++j) vs[std::size_t(j)] = by_rank[std::size_t(k[std::size_t(j)])];
+    return vs;
+  };
   std::vector<char> paired(keys.size(), 0);
   for (phat::index p = 0; p < pairs.get_num_pairs(); ++p) {
     const auto [b, d] = pairs.get_pair(p);
@@ -146,6 +164,8 @@ TetDiagram tet_lower_star_persistence(std::int32_t vertex_count, const std::vect
     q.dim = dim_of(keys[std::size_t(order[std::size_t(b)])]);
     q.birth_vertex = vertex_of(b);
     q.death_vertex = vertex_of(d);
+    q.birth_simplex = simplex_of(b);
+    q.death_simplex = simplex_of(d);
     q.birth = value_at(b);
     q.death = value_at(d);
     diagram.pairs.push_back(q);
@@ -155,6 +175,7 @@ TetDiagram tet_lower_star_persistence(std::int32_t vertex_count, const std::vect
       TetPersistencePair q;
       q.dim = dim_of(keys[std::size_t(order[p])]);
       q.birth_vertex = vertex_of(phat::index(p));
+      q.birth_simplex = simplex_of(phat::index(p));
       q.birth = value_at(phat::index(p));
       q.death = std::numeric_limits<double>::infinity();
       diagram.essential.push_back(q);

@@ -48,19 +48,25 @@ void keep_stronger(std::array<double, 2>& best, const Choke& c) {
 }  // namespace
 
 ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, const ChokeParameters& params) {
-  ChokeSet out;
   FreudenthalComplex cx(grid.dims);
   auto [lo, hi] = std::minmax_element(grid.values.begin(), grid.values.end());
-  out.R_in = std::max(0.0, -double(*lo));
-  out.R_out = std::max(0.0, double(*hi));
+  return find_chokes(diagram.pairs, diagram.essential.size(), std::max(0.0, -double(*lo)), std::max(0.0, double(*hi)), params,
+                     [&](int dim, Id simplex) { return centroid(grid, cx, dim, simplex); });
+}
+
+ChokeSet find_chokes(const std::vector<PersistencePair>& pairs, std::size_t essential_classes, double R_in, double R_out,
+                     const ChokeParameters& params, const std::function<std::array<double, 3>(int, Id)>& centroid) {
+  ChokeSet out;
+  out.R_in = R_in;
+  out.R_out = R_out;
   out.d_max_handle = params.d_max.resolve(out.R_in);
   out.d_max_tunnel = params.d_max.resolve(out.R_out);
   out.min_persistence_handle = params.min_persistence.resolve(out.R_in);
   out.min_persistence_tunnel = params.min_persistence.resolve(out.R_out);
-  out.components = int(diagram.essential.size());
+  out.components = int(essential_classes);
 
-  for (std::size_t pi = 0; pi < diagram.pairs.size(); ++pi) {
-    const PersistencePair& p = diagram.pairs[pi];
+  for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+    const PersistencePair& p = pairs[pi];
     const double b = p.birth, d = p.death;
     Choke c;
     c.birth = b;
@@ -132,7 +138,7 @@ ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, 
     }
   }
   out.components += out.gaps;
-  for (Choke& c : out.chokes) c.point = centroid(grid, cx, c.simplex_dim, c.simplex);
+  for (Choke& c : out.chokes) c.point = centroid(c.simplex_dim, c.simplex);
   std::stable_sort(out.chokes.begin(), out.chokes.end(), [](const Choke& a, const Choke& b) {
     if (a.kind != b.kind) return a.kind == Kind::Generator;
     if (a.side != b.side) return a.side == Side::Handle;

@@ -14,6 +14,7 @@ struct TetPersistencePair {
   int dim = 0;
   double birth = 0, death = 0;  // death = +inf for an essential class
   std::int32_t birth_vertex = -1, death_vertex = -1;
+  std::array<std::int32_t, 4> birth_simplex{-1, -1, -1, -1}, death_simplex{-1, -1, -1, -1};  // vertex ids, -1 padded
 };
 
 struct TetDiagram {

@@ -2,6 +2,7 @@
 // Stage `chokes`: reads the persistence pairs of the signed distance as DESIGN §2's table says and keeps
 // the handle/tunnel generators (always) and the additional chokes that pass d_max and min_persistence.
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -62,5 +63,11 @@ struct ChokeSet {
 };
 
 ChokeSet find_chokes(const ScalarGrid& grid, const PersistenceDiagram& diagram, const ChokeParameters& params);
+
+// The same reading of the pairs of any complex (essential_classes: of dimension 0, the components of the box),
+// with R_in / R_out its deepest inside and farthest outside values and `centroid(dim, simplex)` placing a choke
+// simplex given by the pair's simplex id.
+ChokeSet find_chokes(const std::vector<PersistencePair>& pairs, std::size_t essential_classes, double R_in, double R_out,
+                     const ChokeParameters& params, const std::function<std::array<double, 3>(int, Id)>& centroid);
 
 }  // namespace chokeloops
