@@ -142,3 +142,27 @@ TEST(CliAnalyze, AFailedSelfCheckIsReportedAsABugWithItsOwnExitCode) {
   EXPECT_NE(o.err.find("please report it"), std::string::npos) << o.err;
   fs::remove_all(dir);
 }
+
+#ifdef CHOKELOOPS_HAS_TETGEN
+TEST(CliAnalyze, TetgenComplexWritesTheChokesTableOfAClosedMeshAndRefusesOthers) {
+  const std::string data = std::string(CHOKELOOPS_DATA);
+  const fs::path dir = fs::temp_directory_path() / ("chokeloops_tetgen_" + std::to_string(::getpid()));
+  Outcome o = run_cli("analyze '" + data + "/meshes/kitten_euclid.off' -o '" + dir.string() + "' --complex tetgen --tet-spacing 4");
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("complex tetgen"), std::string::npos) << o.out;
+  std::ifstream csv(dir / "chokes.csv");
+  std::string line;
+  int handle_generators = 0, tunnel_generators = 0;
+  while (std::getline(csv, line)) handle_generators += line.rfind("handle,generator,", 0) == 0, tunnel_generators += line.rfind("tunnel,generator,", 0) == 0;
+  EXPECT_EQ(handle_generators, 1);
+  EXPECT_EQ(tunnel_generators, 1);
+  for (const std::string& bad : {"/meshes/fertility_vmas.off' --complex tetgen", "/molecules/2kix.pdb' --complex tetgen",
+                                 "/meshes/kitten_euclid.off' --complex tetgen --resolution 64",
+                                 "/meshes/kitten_euclid.off' --tet-spacing 4", "/meshes/kitten_euclid.off' --complex tets"}) {
+    o = run_cli("analyze '" + data + bad + " -o '" + dir.string() + "'");
+    EXPECT_EQ(o.code, 2) << bad;
+    EXPECT_EQ(lines(o.err), 1) << bad << ": " << o.err;
+  }
+  fs::remove_all(dir);
+}
+#endif
