@@ -114,6 +114,17 @@ TEST(TetComplex, TorusDepthsAreItsRadiiWithinTwoVoxelsOfTheGridRun) {
   EXPECT_NEAR(pairs[0].death, 0.2, 0.02);
 }
 
+TEST(TetComplex, DoubleTorusHasTwoGenusPairsAsTheGridPath) {
+  const Sdf shape = analytic::double_torus();
+  const ScalarGrid fine = sample_field({96, 96, 96}, shape);
+  int grid_pairs = 0;
+  for (const auto& p : lower_star_persistence(fine).pairs) grid_pairs += p.dim == 1 && p.birth <= 0 && p.death > 0;
+  const TetField field = tetrahedralize_with_distance(mesh_of(extract_zero_surface(sample_field({40, 40, 40}, shape))));
+  const auto pairs = genus_pairs(tet_lower_star_persistence(std::int32_t(field.vertices.size()), field.tets, field.values, &field.inside_tets));
+  EXPECT_EQ(grid_pairs, 2);
+  EXPECT_EQ(pairs.size(), 2u);
+}
+
 TEST(TetComplex, SimplicesOutsideWithEveryVertexOnTheSurfaceEnterAfterLevelZero) {
   // No interior points: most tets have all their vertices on the surface. Taken at 0 with the solid, those
   // outside it close and open loops that the solid does not have.
