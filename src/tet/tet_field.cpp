@@ -24,7 +24,6 @@
 #include <sstream>
 #include <string>
 
-#include "chokeloops/field/winding_number.h"
 #include "chokeloops/grid.h"
 
 namespace chokeloops {
@@ -74,6 +73,7 @@ void require_no_self_intersection(const TriangleMesh& mesh) {
 struct TetgenResult {
   std::vector<double> points;       // x y z per vertex
   std::vector<std::int32_t> tets;   // 4 per tet
+  std::vector<std::int32_t> neighbours;  // 4 per tet: the tet across the face opposite each corner, -1 none
 };
 
 void write_all(int fd, const void* data, std::size_t bytes) {
@@ -104,11 +104,13 @@ TetgenResult tetrahedralize_in_child(tetgenio& in, std::string switches) {
       header[0] = 2;
     }
     if (header[0] == 0) header[1] = out.numberofpoints, header[2] = out.numberoftetrahedra;
-    if (header[0] == 0 && out.numberofcorners != 4) header[0] = -2;
+    if (header[0] == 0 && (out.numberofcorners != 4 || !out.neighborlist)) header[0] = -2;
     write_all(fd[1], header, sizeof header);
     if (header[0] == 0) {
       write_all(fd[1], out.pointlist, sizeof(REAL) * 3 * std::size_t(header[1]));
       std::vector<std::int32_t> tets(out.tetrahedronlist, out.tetrahedronlist + 4 * header[2]);
+      write_all(fd[1], tets.data(), sizeof(std::int32_t) * tets.size());
+      tets.assign(out.neighborlist, out.neighborlist + 4 * header[2]);
       write_all(fd[1], tets.data(), sizeof(std::int32_t) * tets.size());
     }
     close(fd[1]);
@@ -144,12 +146,49 @@ TetgenResult tetrahedralize_in_child(tetgenio& in, std::string switches) {
   if (code != 0) throw InternalError("TetGen failed with code " + std::to_string(code) + " (switches " + switches + ")");
   TetgenResult r;
   const std::size_t point_bytes = sizeof(double) * 3 * std::size_t(header[1]), tet_bytes = sizeof(std::int32_t) * 4 * std::size_t(header[2]);
-  if (bytes.size() != sizeof header + point_bytes + tet_bytes) throw InternalError("TetGen's process returned a truncated mesh");
+  if (bytes.size() != sizeof header + point_bytes + 2 * tet_bytes) throw InternalError("TetGen's process returned a truncated mesh");
   r.points.resize(3 * std::size_t(header[1]));
   r.tets.resize(4 * std::size_t(header[2]));
+  r.neighbours.resize(4 * std::size_t(header[2]));
   std::memcpy(r.points.data(), bytes.data() + sizeof header, point_bytes);
   std::memcpy(r.tets.data(), bytes.data() + sizeof header + point_bytes, tet_bytes);
+  std::memcpy(r.neighbours.data(), bytes.data() + sizeof header + point_bytes + tet_bytes, tet_bytes);
   return r;
+}
+
+// Each tet's side, exactly: a walk from the box's corner (outside) across the tets' faces, changing side at
+// each input triangle. Nested surfaces alternate; no winding number is needed.
+std::vector<char> sides_of_tets(const std::vector<std::array<std::int32_t, 4>>& tets, const std::vector<std::int32_t>& neighbours,
+                                const TriangleMesh& mesh, int nv) {
+  std::vector<std::array<int, 3>> input(mesh.faces.begin(), mesh.faces.end());
+  for (auto& f : input) std::sort(f.begin(), f.end());
+  std::sort(input.begin(), input.end());
+  auto on_surface = [&](std::array<int, 3> f) {
+    if (f[0] >= nv || f[1] >= nv || f[2] >= nv) return false;
+    std::sort(f.begin(), f.end());
+    return std::binary_search(input.begin(), input.end(), f);
+  };
+  std::vector<signed char> side(tets.size(), -1);
+  std::vector<std::size_t> queue;
+  for (std::size_t t = 0; t < tets.size() && queue.empty(); ++t)
+    for (std::int32_t v : tets[t])
+      if (v == nv) side[t] = 0, queue.push_back(t);  // the box's first corner: outside
+  if (queue.empty()) throw InternalError("TetGen's complex has no tet at the box's corner");
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::size_t t = queue[q];
+    for (int i = 0; i < 4; ++i) {
+      const std::int32_t u = neighbours[4 * t + std::size_t(i)];
+      if (u < 0) continue;
+      std::array<int, 3> face;
+      for (int j = 0, n = 0; j < 4; ++j)
+        if (j != i) face[std::size_t(n++)] = tets[t][std::size_t(j)];
+      const signed char s = on_surface(face) ? static_cast<signed char>(1 - side[t]) : side[t];
+      if (side[std::size_t(u)] < 0) side[std::size_t(u)] = s, queue.push_back(std::size_t(u));
+      else if (side[std::size_t(u)] != s) throw InternalError("TetGen's complex: a tet is both inside and outside the mesh");
+    }
+  }
+  if (queue.size() != tets.size()) throw InternalError("TetGen's complex is not connected across its faces");
+  return std::vector<char>(side.begin(), side.end());
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -185,7 +224,6 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   for (const auto& f : mesh.faces) triangles.emplace_back(point(f[0]), point(f[1]), point(f[2]));
   Tree tree(triangles.begin(), triangles.end());
   tree.accelerate_distance_queries();
-  const WindingNumber winding(mesh);
 
   // Points inside and outside where the function is sampled: a lattice over the box (the grid path's samples, in
   // effect), less those nearer the surface than half its spacing, where they would only make slivers.
@@ -236,13 +274,13 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
     for (int i = 0; i < p.numberofvertices; ++i)
       p.vertexlist[i] = f < nf ? mesh.faces[std::size_t(f)][std::size_t(i)] : nv + kBoxQuads[f - nf][i];
   }
-  // p: a PLC; q: quality; a: volume; Y: no Steiner point on the input's facets (the surface stays a subcomplex
+  // p: a PLC; q: quality; a: volume; n: neighbours; Y: no Steiner point on the input's facets (the surface stays a subcomplex
   // with the input's own edges); z: indices from 0; Q: quiet.
   std::ostringstream sw;
   sw << "p";
   if (options.radius_edge > 0) sw << "q" << options.radius_edge;
   if (options.max_volume > 0) sw << "a" << options.max_volume;
-  sw << "YzQ";
+  sw << "YnzQ";  // n: each tet's neighbours
   const TetgenResult out = tetrahedralize_in_child(in, sw.str());
   TetField field;
   field.input_vertices = nv;
@@ -257,20 +295,18 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
     for (int i = 0; i < 4; ++i) field.tets[t][std::size_t(i)] = out.tets[4 * t + std::size_t(i)];
   field.seconds_tetgen = seconds_since(t0);
 
-  // Distance from CGAL's AABB tree; sign from the winding number (1 inside a closed, outward mesh).
+  // Distance from CGAL's AABB tree; the sign from the side of the tets around the vertex.
   const auto t1 = std::chrono::steady_clock::now();
+  field.inside_tets = sides_of_tets(field.tets, out.neighbours, mesh, nv);
+  // A vertex off the surface lies strictly inside one side: that of any tet around it.
+  std::vector<signed char> vertex_side(field.vertices.size(), -1);
+  for (std::size_t t = 0; t < field.tets.size(); ++t)
+    for (std::int32_t v : field.tets[t]) vertex_side[std::size_t(v)] = field.inside_tets[t];
   field.values.assign(field.vertices.size(), 0.0);
   tbb::parallel_for(std::size_t(nv), field.vertices.size(), [&](std::size_t v) {
     const auto& p = field.vertices[v];
     const double d = std::sqrt(tree.squared_distance(K::Point_3(p[0], p[1], p[2])));
-    field.values[v] = std::abs(winding(p)) > 0.5 ? -d : d;
-  });
-  field.inside_tets.assign(field.tets.size(), 0);
-  tbb::parallel_for(std::size_t(0), field.tets.size(), [&](std::size_t t) {
-    std::array<double, 3> c{0, 0, 0};
-    for (std::int32_t v : field.tets[t])
-      for (int a = 0; a < 3; ++a) c[std::size_t(a)] += 0.25 * field.vertices[std::size_t(v)][std::size_t(a)];
-    field.inside_tets[t] = std::abs(winding(c)) > 0.5;
+    field.values[v] = vertex_side[v] == 1 ? -d : d;
   });
   field.seconds_distance = seconds_since(t1);
   return field;

@@ -26,7 +26,7 @@ struct TetField {
   std::vector<std::array<double, 3>> vertices;  // the input's vertices first, in their order, then TetGen's
   std::vector<std::array<std::int32_t, 4>> tets;
   std::vector<double> values;                   // signed distance to the input surface, per vertex
-  std::vector<char> inside_tets;                // per tet: inside the input surface (winding number at its centroid)
+  std::vector<char> inside_tets;                // per tet: inside the input surface (a walk across faces from the box)
   std::int32_t input_vertices = 0;
   double seconds_tetgen = 0, seconds_distance = 0;
 };
