@@ -158,7 +158,8 @@ TEST(CliAnalyze, TetgenComplexWritesTheChokesTableOfAClosedMeshAndRefusesOthers)
   EXPECT_EQ(tunnel_generators, 1);
   for (const std::string& bad : {"/meshes/fertility_vmas.off' --complex tetgen", "/molecules/2kix.pdb' --complex tetgen",
                                  "/meshes/kitten_euclid.off' --complex tetgen --resolution 64",
-                                 "/meshes/kitten_euclid.off' --tet-spacing 4", "/meshes/kitten_euclid.off' --complex tets"}) {
+                                 "/meshes/kitten_euclid.off' --tet-spacing 4", "/meshes/kitten_euclid.off' --complex tets",
+                                 "/meshes/kitten_euclid.off' --complex tetgen --tet-quality 1"}) {
     o = run_cli("analyze '" + data + bad + " -o '" + dir.string() + "'");
     EXPECT_EQ(o.code, 2) << bad;
     EXPECT_EQ(lines(o.err), 1) << bad << ": " << o.err;

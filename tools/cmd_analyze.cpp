@@ -13,6 +13,7 @@
 #include "chokeloops/analyze.h"
 #include "chokeloops/analyze_molecule.h"
 #include "chokeloops/output/view.h"
+#include "chokeloops/tet/tet_field.h"  // options only: the path itself is built with CHOKELOOPS_TETGEN
 #ifdef CHOKELOOPS_HAS_TETGEN
 #include "chokeloops/tet/analyze_tet.h"
 #endif
@@ -45,6 +46,9 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
                             the chokes table, no loops yet
   --tet-spacing H           tetgen: spacing of the interior sample points, input units (default: the box's
                             diagonal / 64)
+  --tet-quality Q           tetgen: also refine to a radius-edge ratio Q > 1 (TetGen -q; slow with the surface
+                            kept, and it may not end on a mesh of thin triangles)
+  --tet-max-volume V        tetgen: also refine to tets of volume V at most, input units cubed (TetGen -a)
   --threads N               worker threads (default: all cores); results do not depend on it
   --max-memory BYTES        refuse grids needing more (e.g. 8G; default 80% of RAM)
   --png FILE                also render a picture of the surface and its loops (needs chromium)
@@ -115,7 +119,7 @@ class Progress {
 };
 
 // --complex tetgen: the chokes from TetGen's complex of a closed mesh (analyze_tet.h).
-int run_tetgen(const std::string& input, const std::string& outdir, double spacing, const ChokeParameters& params, bool grid_flags) {
+int run_tetgen(const std::string& input, const std::string& outdir, const TetOptions& tet, const ChokeParameters& params, bool grid_flags) {
 #ifdef CHOKELOOPS_HAS_TETGEN
   if (grid_flags) throw Error("--resolution applies to the grid complex; --complex tetgen takes --tet-spacing");
   const std::size_t dot = input.rfind('.');
@@ -126,8 +130,6 @@ int run_tetgen(const std::string& input, const std::string& outdir, double spaci
     throw Error("--complex tetgen takes a mesh (.obj .ply .off .stl): " + input);
   const auto t0 = std::chrono::steady_clock::now();
   const TriangleMesh mesh = read_mesh(input);
-  TetOptions tet;
-  tet.spacing = spacing;
   const TetAnalysis a = analyze_tet_complex(mesh, tet, params);
   std::error_code ec;
   std::filesystem::create_directories(outdir, ec);
@@ -149,7 +151,7 @@ int run_tetgen(const std::string& input, const std::string& outdir, double spaci
   std::printf("wrote %s/chokes.csv\n", outdir.c_str());
   return 0;
 #else
-  (void)input, (void)outdir, (void)spacing, (void)params, (void)grid_flags;
+  (void)input, (void)outdir, (void)tet, (void)params, (void)grid_flags;
   throw Error("--complex tetgen: this build leaves TetGen out (CHOKELOOPS_TETGEN=OFF)");
 #endif
 }
@@ -164,7 +166,7 @@ int run(std::vector<std::string> args) {
   cli::VolumeCliOptions vo;
   bool max_loops_given = false;
   bool tetgen = false;
-  double tet_spacing = 0;
+  double tet_spacing = 0, tet_quality = 0, tet_max_volume = 0;
   cli::Args in("analyze", std::move(args));
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
@@ -220,6 +222,12 @@ int run(std::vector<std::string> args) {
     } else if (in.is("--tet-spacing")) {
       tet_spacing = in.number();
       if (!(tet_spacing > 0)) throw Error("--tet-spacing must be positive (" + in.see_help() + ")");
+    } else if (in.is("--tet-quality")) {
+      tet_quality = in.number();
+      if (!(tet_quality > 1)) throw Error("--tet-quality must be above 1 (TetGen's radius-edge ratio; " + in.see_help() + ")");
+    } else if (in.is("--tet-max-volume")) {
+      tet_max_volume = in.number();
+      if (!(tet_max_volume > 0)) throw Error("--tet-max-volume must be positive (" + in.see_help() + ")");
     } else if (in.is("--threads")) threads = in.threads();
     else if (in.is("--max-memory")) options.levelset.max_memory = parse_bytes(in.value());
     else if (in.is("--png")) png = in.value();
@@ -252,8 +260,15 @@ int run(std::vector<std::string> args) {
   auto limit = cli::limit_threads(threads);
 
   Progress progress(quiet);
-  if (tetgen) return run_tetgen(input, outdir, tet_spacing, options.chokes, !grid_flags.empty() || options.resolution_auto);
-  if (tet_spacing > 0) throw Error("--tet-spacing applies to --complex tetgen only");
+  if (tetgen) {
+    TetOptions tet;
+    tet.spacing = tet_spacing;
+    tet.radius_edge = tet_quality;
+    tet.max_volume = tet_max_volume;
+    return run_tetgen(input, outdir, tet, options.chokes, !grid_flags.empty() || options.resolution_auto);
+  }
+  if (tet_spacing > 0 || tet_quality > 0 || tet_max_volume > 0)
+    throw Error("--tet-spacing, --tet-quality and --tet-max-volume apply to --complex tetgen only");
   if (is_molecule_path(input)) {
     if (!grid_flags.empty() || options.resolution_auto)
       throw Error("--resolution does not apply to molecules; use --voxel-size in Å (" + std::string("see chokeloops analyze --help") + ")");
