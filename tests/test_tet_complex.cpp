@@ -14,6 +14,7 @@
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
 #include "chokeloops/surface/surface.h"
+#include "chokeloops/tet/analyze_tet.h"
 #include "chokeloops/tet/tet_field.h"
 #include "chokeloops/tet/tet_persistence.h"
 #include "chokeloops/topology/persistence.h"
@@ -134,6 +135,10 @@ TEST(TetComplex, SimplicesOutsideWithEveryVertexOnTheSurfaceEnterAfterLevelZero)
   const std::int32_t n = std::int32_t(field.vertices.size());
   EXPECT_EQ(genus_pairs(tet_lower_star_persistence(n, field.tets, field.values, &field.inside_tets)).size(), 1u);
   EXPECT_NE(genus_pairs(tet_lower_star_persistence(n, field.tets, field.values)).size(), 1u);
+  // Its tunnel dies at 0+: the chokes table, which holds floats, must still count it.
+  const TetAnalysis a = analyze_tet_complex(read_mesh(std::string(CHOKELOOPS_DATA) + "/meshes/kitten_euclid.off"), o, {});
+  EXPECT_EQ(a.chokes.handle_generators, 1);
+  EXPECT_EQ(a.chokes.tunnel_generators, 1);
 }
 
 TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {

@@ -4,10 +4,22 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 
 #include "chokeloops/grid.h"
 
 namespace chokeloops {
+
+namespace {
+
+// The grid's pairs hold floats. A value above 0 must stay above it: "0+" (denorm_min) and tiny distances would
+// round to 0 and move a tunnel's death into the solid, losing the pair from the genus.
+float to_float_keeping_sign(double x) {
+  const float f = float(x);
+  return x > 0 && f <= 0 ? std::numeric_limits<float>::denorm_min() : f;
+}
+
+}  // namespace
 
 TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet, const ChokeParameters& params) {
   TetAnalysis a;
@@ -26,8 +38,8 @@ TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet,
   for (const TetPersistencePair& p : d.pairs) {
     PersistencePair q;
     q.dim = p.dim;
-    q.birth = float(p.birth);
-    q.death = float(p.death);
+    q.birth = to_float_keeping_sign(p.birth);
+    q.death = to_float_keeping_sign(p.death);
     q.birth_vertex = p.birth_vertex;
     q.death_vertex = p.death_vertex;
     q.birth_simplex = Id(simplices.size());
