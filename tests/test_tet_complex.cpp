@@ -56,6 +56,17 @@ std::vector<TetPersistencePair> genus_pairs(const TetDiagram& d) {
 
 TriangleMesh mesh_of(const SurfaceMesh& s) { return TriangleMesh{s.vertices, s.faces}; }
 
+// The mesh is refused as bad input (exit 2) with a message containing `why`.
+void expect_refused(const TriangleMesh& m, const std::string& why) {
+  try {
+    tetrahedralize_with_distance(m);
+    FAIL() << "a mesh that should fail with '" << why << "' was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.exit_code, 2);
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 
 TEST(TetPersistence, EqualsTheGridEngineOnItsOwnTriangulationOfARoughField) {
@@ -143,25 +154,13 @@ TEST(TetComplex, SimplicesOutsideWithEveryVertexOnTheSurfaceEnterAfterLevelZero)
 
 TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {
   TriangleMesh m{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}}};
-  try {
-    tetrahedralize_with_distance(m);
-    FAIL() << "an open mesh was accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_code, 2);
-    EXPECT_NE(std::string(e.what()).find("closed, manifold"), std::string::npos) << e.what();
-  }
+  expect_refused(m, "closed, manifold");
 }
 
 TEST(TetComplex, SelfIntersectingMeshIsRefusedBeforeTetGenSeesIt) {
   // Two closed tetrahedra, the second's apex through the first's base.
   TriangleMesh m{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, -0.5}, {1.2, 0.2, -0.5}, {0.2, 1.2, -0.5}, {0.2, 0.2, 0.5}},
                  {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 6, 5}, {4, 5, 7}, {4, 7, 6}, {5, 6, 7}}};
-  try {
-    tetrahedralize_with_distance(m);
-    FAIL() << "a self-intersecting mesh was accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.exit_code, 2);
-    EXPECT_NE(std::string(e.what()).find("intersects itself"), std::string::npos) << e.what();
-  }
+  expect_refused(m, "intersects itself");
 }
 #endif
