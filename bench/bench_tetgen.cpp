@@ -1,7 +1,8 @@
 // The paper's pipeline (TetGen's complex of the input surface, signed distance at its vertices, persistence on
 // the tets) beside the grid engine's (level set on a grid, persistence on its implicit Freudenthal complex),
 // on the paper's Table 1 models found in data: sizes, time per stage, genus pairs and the deepest handle's
-// depth, peak RSS. Each path runs in its own child process per run (peak RSS per path); medians over --runs.
+// depth, the loop stage (loops traced and found, time per loop), peak RSS. Each path runs in its own child
+// process per run (peak RSS per path); medians over --runs.
 //
 //   bench_tetgen [--runs 3] [--data data] [--only NAME] [--cells C] [--resolution 256]
 #include <sys/resource.h>
@@ -17,11 +18,11 @@
 #include <string>
 #include <vector>
 
+#include "chokeloops/analyze.h"
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
+#include "chokeloops/tet/analyze_tet.h"
 #include "chokeloops/tet/tet_field.h"
-#include "chokeloops/tet/tet_persistence.h"
-#include "chokeloops/topology/persistence.h"
 
 using namespace chokeloops;
 using Figures = std::map<std::string, double>;
@@ -44,30 +45,39 @@ Figures run_path(const std::string& file, bool tet, double cells, int resolution
   if (tet) {
     TetOptions o;
     o.default_cells = cells;
-    const TetField field = tetrahedralize_with_distance(mesh, o);
-    f["tetgen"] = field.seconds_tetgen * 1e3;
-    f["distance"] = field.seconds_distance * 1e3;
-    f["tets"] = double(field.tets.size());
-    f["vertices"] = double(field.vertices.size());
-    const TetDiagram d = tet_lower_star_persistence(std::int32_t(field.vertices.size()), field.tets, field.values, &field.inside_tets);
-    f["persistence"] = (d.seconds_build + d.seconds_reduce) * 1e3;
-    f["of it PHAT"] = d.seconds_reduce * 1e3;
-    for (const auto& p : d.pairs)
-      if (p.dim == 1 && p.birth <= 0 && p.death > 0) ++genus_pairs, deepest = std::max(deepest, -p.birth);
+    const TetAnalysis a = analyze_tet_complex(mesh, o, {});
+    for (const char* stage : {"tetgen", "distance", "persistence", "chokes", "loops"}) f[stage] = a.timings_ms.at(stage);
+    f["tets"] = double(a.tets);
+    f["vertices"] = double(a.vertices);
+    genus_pairs = a.chokes.handle_generators;
+    for (const Choke& c : a.chokes.chokes)
+      if (c.side == Side::Handle && c.kind == Kind::Generator) deepest = std::max(deepest, c.depth);
+    int found = 0;
+    for (const InputLoop& l : a.loops) found += l.loop.found && l.verified;
+    f["loops"] = double(a.loops.size());
+    f["loops found"] = found;
+    f["loops ms"] = a.timings_ms.at("loops");
   } else {
     LevelSetOptions o;
     o.resolution = resolution;
     o.quiet = true;
     t = std::chrono::steady_clock::now();
-    const LevelSetResult ls = mesh_to_levelset(mesh, o, file);
+    LevelSetResult ls = mesh_to_levelset(mesh, o, file);
     f["levelset"] = ms_since(t);
     f["vertices"] = double(ls.grid.vertex_count());
-    t = std::chrono::steady_clock::now();
-    const PersistenceDiagram d = lower_star_persistence(ls.grid);
-    f["persistence"] = ms_since(t);
-    for (const auto& p : d.pairs)
-      if (p.dim == 1 && p.birth <= 0 && p.death > 0) ++genus_pairs, deepest = std::max(deepest, double(-p.birth));
     f["voxel"] = ls.grid.voxel_size;
+    AnalyzeOptions ao;
+    ao.input_loops = false;
+    const AnalyzeResult r = analyze_grid(std::move(ls.grid), ao);
+    for (const char* stage : {"persistence", "chokes", "surface"}) f[stage] = r.timings_ms.at(stage);
+    f["loops ms"] = r.timings_ms.at("loops");
+    genus_pairs = r.chokes.handle_generators;
+    for (const Choke& c : r.chokes.chokes)
+      if (c.side == Side::Handle && c.kind == Kind::Generator) deepest = std::max(deepest, c.depth);
+    int found = 0;
+    for (const Loop& l : r.loops) found += l.found;
+    f["loops"] = double(r.loops.size());
+    f["loops found"] = found;
   }
   f["genus pairs"] = genus_pairs;
   f["deepest handle"] = deepest;

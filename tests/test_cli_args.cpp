@@ -144,7 +144,7 @@ TEST(CliAnalyze, AFailedSelfCheckIsReportedAsABugWithItsOwnExitCode) {
 }
 
 #ifdef CHOKELOOPS_HAS_TETGEN
-TEST(CliAnalyze, TetgenComplexWritesTheChokesTableOfAClosedMeshAndRefusesOthers) {
+TEST(CliAnalyze, TetgenComplexWritesTheChokesAndLoopsOfAClosedMeshAndRefusesOthers) {
   const std::string data = std::string(CHOKELOOPS_DATA);
   const fs::path dir = fs::temp_directory_path() / ("chokeloops_tetgen_" + std::to_string(::getpid()));
   Outcome o = run_cli("analyze '" + data + "/meshes/kitten_euclid.off' -o '" + dir.string() + "' --complex tetgen --tet-spacing 4");
@@ -156,6 +156,17 @@ TEST(CliAnalyze, TetgenComplexWritesTheChokesTableOfAClosedMeshAndRefusesOthers)
   while (std::getline(csv, line)) handle_generators += line.rfind("handle,generator,", 0) == 0, tunnel_generators += line.rfind("tunnel,generator,", 0) == 0;
   EXPECT_EQ(handle_generators, 1);
   EXPECT_EQ(tunnel_generators, 1);
+  // loops.json names the complex and gives each loop on the input's edges, checked there.
+  std::ifstream json_file(dir / "loops.json");
+  const nlohmann::json j = nlohmann::json::parse(json_file);
+  EXPECT_EQ(j.at("complex"), "tetgen");
+  int verified_generators = 0;
+  for (const auto& l : j.at("loops"))
+    if (l.at("kind") == "generator" && l.at("found") && l.at("verified") && l.at("check") == "non-contractible" &&
+        l.at("edge_path").size() >= 3 && l.at("input_points").size() == l.at("points").size())
+      ++verified_generators;
+  EXPECT_EQ(verified_generators, 2);
+  EXPECT_TRUE(fs::exists(dir / "surface.ply") && fs::exists(dir / "loops.ply") && fs::exists(dir / "loops.obj"));
   for (const std::string& bad : {"/meshes/fertility_vmas.off' --complex tetgen", "/molecules/2kix.pdb' --complex tetgen",
                                  "/meshes/kitten_euclid.off' --complex tetgen --resolution 64",
                                  "/meshes/kitten_euclid.off' --tet-spacing 4", "/meshes/kitten_euclid.off' --complex tets",

@@ -10,10 +10,14 @@
 #include <set>
 #include <tuple>
 
+#include <tbb/global_control.h>
+
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
+#include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
+#include "chokeloops/surface/topology.h"
 #include "chokeloops/tet/analyze_tet.h"
 #include "chokeloops/tet/tet_field.h"
 #include "chokeloops/tet/tet_persistence.h"
@@ -65,6 +69,47 @@ void expect_refused(const TriangleMesh& m, const std::string& why) {
     EXPECT_EQ(e.exit_code, 2);
     EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
   }
+}
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Every loop of a tet analysis: found; its edge path a closed path of the input's own edges, and each of its
+// points on the input vertex or edge it names; a generator's loop non-contractible on the input (CGAL's
+// Surface_mesh_topology, asked directly).
+void expect_loops_on_input_edges(const TetAnalysis& a) {
+  const MeshAdjacency adj = build_adjacency(a.input);
+  ASSERT_EQ(a.loops.size(), a.chokes.chokes.size());
+  for (std::size_t i = 0; i < a.loops.size(); ++i) {
+    const InputLoop& l = a.loops[i];
+    SCOPED_TRACE("loop " + std::to_string(i) + " " + to_string(l.loop.choke.side) + " " + to_string(l.loop.choke.kind));
+    ASSERT_TRUE(l.loop.found) << l.loop.note;
+    EXPECT_TRUE(l.verified);
+    const auto& p = l.loop.edge_path;
+    ASSERT_GE(p.size(), 3u);
+    for (std::size_t k = 0; k < p.size(); ++k) EXPECT_TRUE(adj.has_edge(p[k], p[(k + 1) % p.size()]));
+    if (l.loop.choke.kind == Kind::Generator) EXPECT_FALSE(loop_is_contractible(a.input, p));
+    ASSERT_EQ(l.where.size(), l.loop.points.size());
+    for (std::size_t k = 0; k < l.where.size(); ++k) {
+      const InputPoint& w = l.where[k];
+      const auto& x = l.loop.points[k];
+      std::array<double, 3> on{};
+      if (w.vertex >= 0) {
+        on = a.input.vertices[std::size_t(w.vertex)];
+      } else {
+        ASSERT_TRUE(adj.has_edge(w.edge[0], w.edge[1]));
+        const auto &u = a.input.vertices[std::size_t(w.edge[0])], &v = a.input.vertices[std::size_t(w.edge[1])];
+        for (int c = 0; c < 3; ++c) on[std::size_t(c)] = u[std::size_t(c)] + w.t * (v[std::size_t(c)] - u[std::size_t(c)]);
+      }
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(x[std::size_t(c)], on[std::size_t(c)], 1e-9);
+    }
+  }
+}
+
+std::vector<const InputLoop*> loops_of(const TetAnalysis& a, Side side, Kind kind) {
+  std::vector<const InputLoop*> out;
+  for (const InputLoop& l : a.loops)
+    if (l.loop.choke.side == side && l.loop.choke.kind == kind) out.push_back(&l);
+  return out;
 }
 
 }  // namespace
@@ -150,6 +195,69 @@ TEST(TetComplex, SimplicesOutsideWithEveryVertexOnTheSurfaceEnterAfterLevelZero)
   const TetAnalysis a = analyze_tet_complex(read_mesh(std::string(CHOKELOOPS_DATA) + "/meshes/kitten_euclid.off"), o, {});
   EXPECT_EQ(a.chokes.handle_generators, 1);
   EXPECT_EQ(a.chokes.tunnel_generators, 1);
+}
+
+TEST(TetLoops, TorusMeridianAndInnerEquatorLieOnTheInputsEdgesWithTheirLengths) {
+  // Tube radius 0.1: the handle's loop is a meridian, 2 pi 0.1 long; hole radius 0.2: the tunnel's is the inner
+  // equator, 2 pi 0.2 long (the marching-cubes mesh at 40^3 is within a few percent of the analytic torus).
+  const TriangleMesh mesh = mesh_of(extract_zero_surface(sample_field({40, 40, 40}, analytic::torus(0.3, 0.1))));
+  const TetAnalysis a = analyze_tet_complex(mesh, {}, {});
+  expect_loops_on_input_edges(a);
+  const auto handles = loops_of(a, Side::Handle, Kind::Generator), tunnels = loops_of(a, Side::Tunnel, Kind::Generator);
+  ASSERT_EQ(handles.size(), 1u);
+  ASSERT_EQ(tunnels.size(), 1u);
+  EXPECT_NEAR(handles[0]->loop.length, 2 * kPi * 0.1, 0.05 * 2 * kPi * 0.1);
+  EXPECT_NEAR(tunnels[0]->loop.length, 2 * kPi * 0.2, 0.05 * 2 * kPi * 0.2);
+  // The meridian circles the tube near its choke point, the equator circles the axis (normal z).
+  EXPECT_LT(std::hypot(handles[0]->loop.centroid[0] - handles[0]->loop.choke.point[0],
+                       handles[0]->loop.centroid[1] - handles[0]->loop.choke.point[1]), 0.05);
+  EXPECT_NEAR(std::abs(tunnels[0]->loop.normal[2]), 1.0, 0.02);
+}
+
+TEST(TetLoops, GenusMeshesHaveEveryGeneratorLoopNonContractibleOnTheirOwnEdges) {
+  const std::string data = std::string(CHOKELOOPS_DATA) + "/meshes/";
+  std::vector<std::pair<std::string, TriangleMesh>> meshes;
+  meshes.push_back({"double torus", mesh_of(extract_zero_surface(sample_field({40, 40, 40}, analytic::double_torus())))});
+  meshes.push_back({"genus3", read_mesh(data + "genus3_directional.off")});
+  meshes.push_back({"kitten", read_mesh(data + "kitten_euclid.off")});
+  for (const auto& [name, mesh] : meshes) {
+    SCOPED_TRACE(name);
+    const int genus = mesh_topology(mesh).genus;
+    const TetAnalysis a = analyze_tet_complex(mesh, {}, {});
+    EXPECT_EQ(a.chokes.handle_generators, genus);
+    EXPECT_EQ(a.chokes.tunnel_generators, genus);
+    EXPECT_EQ(int(loops_of(a, Side::Handle, Kind::Generator).size()), genus);
+    EXPECT_EQ(int(loops_of(a, Side::Tunnel, Kind::Generator).size()), genus);
+    expect_loops_on_input_edges(a);
+  }
+}
+
+TEST(TetLoops, DumbbellNeckLoopCirclesTheNeck) {
+  // Balls of radius 0.2 joined by a neck of radius 0.12 along x: one handle choke, its loop 2 pi 0.12 long
+  // around the x axis.
+  const TriangleMesh mesh = mesh_of(extract_zero_surface(sample_field({48, 48, 48}, analytic::dumbbell())));
+  ChokeParameters p;
+  p.d_max = Threshold::parse("75%");
+  const TetAnalysis a = analyze_tet_complex(mesh, {}, p);
+  expect_loops_on_input_edges(a);
+  const auto necks = loops_of(a, Side::Handle, Kind::Choke);
+  ASSERT_EQ(necks.size(), 1u);
+  EXPECT_NEAR(necks[0]->loop.choke.depth, 0.12, 0.02);
+  EXPECT_NEAR(necks[0]->loop.length, 2 * kPi * 0.12, 0.05 * 2 * kPi * 0.12);
+  EXPECT_NEAR(std::abs(necks[0]->loop.normal[0]), 1.0, 0.02);
+  EXPECT_TRUE(necks[0]->separating);
+}
+
+TEST(TetLoops, LoopsAreTheSameForOneAndTwoThreads) {
+  const TriangleMesh mesh = mesh_of(extract_zero_surface(sample_field({40, 40, 40}, analytic::double_torus())));
+  std::vector<std::vector<int>> paths[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    const TetAnalysis a = analyze_tet_complex(mesh, {}, {});
+    for (const InputLoop& l : a.loops) paths[threads - 1].push_back(l.loop.edge_path);
+  }
+  ASSERT_GE(paths[0].size(), 4u);
+  EXPECT_EQ(paths[0], paths[1]);
 }
 
 TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {

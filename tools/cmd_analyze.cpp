@@ -42,8 +42,8 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
   --min-persistence Y       minimum persistence of additional loops, same units (default 10%)
   --side handle|tunnel|both which loops to report (default both)
   --complex grid|tetgen     grid (default): the engine's implicit complex; tetgen: a closed, manifold mesh's
-                            TetGen tetrahedralization (the paper's pipeline, a reference): chokes.csv and
-                            the chokes table, no loops yet
+                            TetGen tetrahedralization (the paper's pipeline, a reference): the loops lie
+                            on the input's own edges; loops.json ("complex": "tetgen") and chokes.csv
   --tet-spacing H           tetgen: spacing of the interior sample points, input units (default: the box's
                             diagonal / 64)
   --tet-quality Q           tetgen: also refine to a radius-edge ratio Q > 1 (TetGen -q; slow with the surface
@@ -119,7 +119,8 @@ class Progress {
 };
 
 // --complex tetgen: the chokes from TetGen's complex of a closed mesh (analyze_tet.h).
-int run_tetgen(const std::string& input, const std::string& outdir, const TetOptions& tet, const ChokeParameters& params, bool grid_flags) {
+int run_tetgen(const std::string& input, const std::string& outdir, const TetOptions& tet, const ChokeParameters& params, bool grid_flags,
+               bool view) {
 #ifdef CHOKELOOPS_HAS_TETGEN
   if (grid_flags) throw Error("--resolution applies to the grid complex; --complex tetgen takes --tet-spacing");
   const std::size_t dot = input.rfind('.');
@@ -131,27 +132,34 @@ int run_tetgen(const std::string& input, const std::string& outdir, const TetOpt
   const auto t0 = std::chrono::steady_clock::now();
   const TriangleMesh mesh = read_mesh(input);
   const TetAnalysis a = analyze_tet_complex(mesh, tet, params);
-  std::error_code ec;
-  std::filesystem::create_directories(outdir, ec);
-  if (ec || !std::filesystem::is_directory(outdir)) throw Error("cannot create output directory '" + outdir + "': " + ec.message());
-  write_chokes_csv(a.chokes, outdir + "/chokes.csv");
+  write_tet_report(a, params, input, outdir);
+  if (view) write_view_html(outdir);
   const ChokeSet& c = a.chokes;
-  int chokes[2] = {0, 0};
-  for (const Choke& k : c.chokes) chokes[k.side == Side::Tunnel] += k.kind == Kind::Choke;
+  int chokes[2] = {0, 0}, found[2] = {0, 0};
+  for (std::size_t i = 0; i < c.chokes.size(); ++i) {
+    chokes[c.chokes[i].side == Side::Tunnel] += c.chokes[i].kind == Kind::Choke;
+    found[c.chokes[i].side == Side::Tunnel] += a.loops[i].loop.found;
+  }
   std::printf("%s: complex tetgen, %lld vertices, %lld tets (%zu input vertices), genus %d, %d component(s)\n", input.c_str(),
               (long long)a.vertices, (long long)a.tets, mesh.vertices.size(), c.handle_generators, c.components);
-  std::printf("handle loops: %d generator(s), %d choke(s)   tunnel loops: %d generator(s), %d choke(s)   (not traced on this complex)\n",
-              c.handle_generators, chokes[0], c.tunnel_generators, chokes[1]);
-  for (const Choke& k : c.chokes)
-    std::printf("  %s %s: depth %.5g, persistence %.4g at (%.4g, %.4g, %.4g)\n", to_string(k.side), to_string(k.kind), k.depth,
+  std::printf("handle loops: %d generator(s), %d choke(s)   tunnel loops: %d generator(s), %d choke(s)   (traced on the input's edges: %d and %d)\n",
+              c.handle_generators, chokes[0], c.tunnel_generators, chokes[1], found[0], found[1]);
+  for (std::size_t i = 0; i < c.chokes.size(); ++i) {
+    const Choke& k = c.chokes[i];
+    const InputLoop& l = a.loops[i];
+    std::printf("  %s %s: depth %.5g, persistence %.4g at (%.4g, %.4g, %.4g)", to_string(k.side), to_string(k.kind), k.depth,
                 k.persistence, k.point[0], k.point[1], k.point[2]);
+    if (l.loop.found) std::printf(", loop length %.5g%s\n", l.loop.length, l.verified ? "" : " (not verified)");
+    else std::printf(", no loop: %s\n", l.loop.note.c_str());
+  }
   const double total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("time: tetgen %.0f ms, distance %.0f ms, persistence %.0f ms, chokes %.0f ms, total %.0f ms\n", a.timings_ms.at("tetgen"),
-              a.timings_ms.at("distance"), a.timings_ms.at("persistence"), a.timings_ms.at("chokes"), total);
-  std::printf("wrote %s/chokes.csv\n", outdir.c_str());
+  std::printf("time: tetgen %.0f ms, distance %.0f ms, persistence %.0f ms, chokes %.0f ms, loops %.0f ms, total %.0f ms\n",
+              a.timings_ms.at("tetgen"), a.timings_ms.at("distance"), a.timings_ms.at("persistence"), a.timings_ms.at("chokes"),
+              a.timings_ms.at("loops"), total);
+  std::printf("wrote %s/{surface.ply,loops.ply,loops.obj,loops.json,chokes.csv%s}\n", outdir.c_str(), view ? ",view.html" : "");
   return 0;
 #else
-  (void)input, (void)outdir, (void)tet, (void)params, (void)grid_flags;
+  (void)input, (void)outdir, (void)tet, (void)params, (void)grid_flags, (void)view;
   throw Error("--complex tetgen: this build leaves TetGen out (CHOKELOOPS_TETGEN=OFF)");
 #endif
 }
@@ -265,7 +273,7 @@ int run(std::vector<std::string> args) {
     tet.spacing = tet_spacing;
     tet.radius_edge = tet_quality;
     tet.max_volume = tet_max_volume;
-    return run_tetgen(input, outdir, tet, options.chokes, !grid_flags.empty() || options.resolution_auto);
+    return run_tetgen(input, outdir, tet, options.chokes, !grid_flags.empty() || options.resolution_auto, view);
   }
   if (tet_spacing > 0 || tet_quality > 0 || tet_max_volume > 0)
     throw Error("--tet-spacing, --tet-quality and --tet-max-volume apply to --complex tetgen only");

@@ -153,7 +153,7 @@ void carry(const SurfaceMesh& m, const std::vector<char>& added, const MeshAdjac
   out.loop.found = true;
   out.loop.points = s.points;
   out.loop.edge_path = s.edge_path;
-  out.where = locate(m, adj, s.points, s.strip_faces, s.edge_path);
+  out.where = locate_loop_points(m, adj, s);
   describe_loop(out.loop);
   if (options.shorten && s.rings == 0) out.loop.note = "left unshortened: no annulus band around it on the input mesh";
   if (!added.empty()) {
@@ -172,6 +172,10 @@ void carry(const SurfaceMesh& m, const std::vector<char>& added, const MeshAdjac
   }
 }
 }  // namespace
+
+std::vector<InputPoint> locate_loop_points(const SurfaceMesh& mesh, const MeshAdjacency& adj, const ShortenResult& s) {
+  return locate(mesh, adj, s.points, s.strip_faces, s.edge_path);
+}
 
 InputMesh input_mesh_from(const TriangleMesh& mesh, const std::string& name) {
   InputMesh in;

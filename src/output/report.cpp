@@ -5,19 +5,19 @@
 
 #include "chokeloops/analyze.h"
 #include "chokeloops/output/mesh_write.h"
+#include "output/loop_json.h"
 
 namespace chokeloops {
 
-namespace {
-nlohmann::json point(const std::array<double, 3>& p) { return nlohmann::json::array({p[0], p[1], p[2]}); }
+namespace detail {
 
-// One entry of loops.json's "loops" (input_loops.json's entries start from it too).
-nlohmann::json loop_json(const Loop& l, std::size_t id, const FreudenthalComplex& cx, const WorldFrame& wf) {
+nlohmann::json point_json(const std::array<double, 3>& p) { return nlohmann::json::array({p[0], p[1], p[2]}); }
+
+nlohmann::json loop_fields_json(const Loop& l, std::size_t id, const WorldFrame& wf) {
   auto pos = [&](const std::array<double, 3>& p) { return wf.set ? wf.apply(p) : p; };
   const Choke& c = l.choke;
   nlohmann::json pts = nlohmann::json::array();
-  for (auto& p : l.points) pts.push_back(point(pos(p)));
-  auto sc = cx.coords(c.saddle);
+  for (auto& p : l.points) pts.push_back(point_json(pos(p)));
   return {{"id", id},
           {"side", to_string(c.side)},
           {"kind", to_string(c.kind)},
@@ -26,16 +26,42 @@ nlohmann::json loop_json(const Loop& l, std::size_t id, const FreudenthalComplex
           {"birth", c.birth},
           {"death", c.death},
           {"length", l.length},
-          {"choke_point", point(pos(c.point))},
-          {"centroid", point(pos(l.centroid))},
-          {"normal", point(wf.set ? wf.rotate(l.normal) : l.normal)},
+          {"choke_point", point_json(pos(c.point))},
+          {"centroid", point_json(pos(l.centroid))},
+          {"normal", point_json(wf.set ? wf.rotate(l.normal) : l.normal)},
           {"radius_min", l.radius_min},
           {"radius_mean", l.radius_mean},
           {"raw_length", l.raw_length},
           {"found", l.found},
           {"note", l.note},
-          {"choke_simplex", {{"dim", c.simplex_dim}, {"id", c.simplex}, {"grid_vertex", {sc[0], sc[1], sc[2]}}}},
           {"points", pts}};
+}
+
+void add_input_loop_fields(nlohmann::json& e, const InputLoop& il) {
+  e["verified"] = il.verified;
+  if (il.verified)
+    e["check"] = il.loop.choke.kind == Kind::Generator ? "non-contractible" : il.separating ? "separating" : "non-separating";
+  e["edge_path"] = il.loop.edge_path;
+  nlohmann::json where = nlohmann::json::array();
+  for (const InputPoint& w : il.where) {
+    if (w.vertex >= 0) where.push_back({{"vertex", w.vertex}, {"face", w.face}});
+    else where.push_back({{"edge", {w.edge[0], w.edge[1]}}, {"t", w.t}, {"face", w.face}});
+  }
+  e["input_points"] = where;
+}
+
+}  // namespace detail
+
+namespace {
+using detail::point_json;
+
+// One entry of loops.json's "loops" (input_loops.json's entries start from it too).
+nlohmann::json loop_json(const Loop& l, std::size_t id, const FreudenthalComplex& cx, const WorldFrame& wf) {
+  nlohmann::json e = detail::loop_fields_json(l, id, wf);
+  const Choke& c = l.choke;
+  auto sc = cx.coords(c.saddle);
+  e["choke_simplex"] = {{"dim", c.simplex_dim}, {"id", c.simplex}, {"grid_vertex", {sc[0], sc[1], sc[2]}}};
+  return e;
 }
 }  // namespace
 
@@ -45,6 +71,7 @@ std::string report_json(const AnalyzeResult& r, const AnalyzeOptions& options) {
   using nlohmann::json;
   json j;
   j["input"] = std::filesystem::path(r.input).filename().string();
+  j["complex"] = "grid";
   j["units"] = wf.set ? "mm" : "input";
   if (wf.set) {
     json m = json::array();
@@ -122,16 +149,7 @@ std::string input_loops_json(const AnalyzeResult& r) {
     const InputLoop& il = r.input_loops[i];
     json e = loop_json(il.loop, i, cx, WorldFrame{});
     e["grid_length"] = il.grid_length;
-    e["verified"] = il.verified;
-    if (il.verified)
-      e["check"] = il.loop.choke.kind == Kind::Generator ? "non-contractible" : il.separating ? "separating" : "non-separating";
-    e["edge_path"] = il.loop.edge_path;
-    json where = json::array();
-    for (const InputPoint& w : il.where) {
-      if (w.vertex >= 0) where.push_back({{"vertex", w.vertex}, {"face", w.face}});
-      else where.push_back({{"edge", {w.edge[0], w.edge[1]}}, {"t", w.t}, {"face", w.face}});
-    }
-    e["input_points"] = where;
+    detail::add_input_loop_fields(e, il);
     loops.push_back(e);
     carried += il.loop.found;
     transfer_ms += il.transfer_ms;

@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <fstream>
 #include <limits>
 
 #include "chokeloops/grid.h"
@@ -21,8 +19,12 @@ float to_float_keeping_sign(double x) {
 
 }  // namespace
 
-TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet, const ChokeParameters& params) {
+TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet, const ChokeParameters& params,
+                                bool trace_loops, const TetLoopOptions& loops) {
   TetAnalysis a;
+  a.input.vertices = mesh.vertices;
+  a.input.faces = mesh.faces;
+  a.input_report = mesh_topology(mesh);
   const TetField field = tetrahedralize_with_distance(mesh, tet);
   a.timings_ms["tetgen"] = field.seconds_tetgen * 1e3;
   a.timings_ms["distance"] = field.seconds_distance * 1e3;
@@ -33,7 +35,7 @@ TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet,
   a.timings_ms["persistence"] = (d.seconds_build + d.seconds_reduce) * 1e3;
   const auto t0 = std::chrono::steady_clock::now();
   // The grid's pair record, with each pair's simplices kept in a table that the ids index.
-  std::vector<std::array<std::int32_t, 4>> simplices;
+  std::vector<std::array<std::int32_t, 4>>& simplices = a.pair_simplices;
   std::vector<PersistencePair> pairs;
   for (const TetPersistencePair& p : d.pairs) {
     PersistencePair q;
@@ -61,18 +63,12 @@ TetAnalysis analyze_tet_complex(const TriangleMesh& mesh, const TetOptions& tet,
     return c;
   });
   a.timings_ms["chokes"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (trace_loops) {
+    const auto t1 = std::chrono::steady_clock::now();
+    a.loops = trace_tet_loops(field, a.input, a.chokes.chokes, simplices, loops);
+    a.timings_ms["loops"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+  }
   return a;
-}
-
-void write_chokes_csv(const ChokeSet& chokes, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw Error("cannot write " + path);
-  out.precision(9);
-  out << "side,kind,depth,persistence,birth,death,x,y,z\n";
-  for (const Choke& c : chokes.chokes)
-    out << to_string(c.side) << ',' << to_string(c.kind) << ',' << c.depth << ',' << c.persistence << ',' << c.birth << ','
-        << c.death << ',' << c.point[0] << ',' << c.point[1] << ',' << c.point[2] << '\n';
-  if (!out) throw Error("cannot write " + path);
 }
 
 }  // namespace chokeloops

@@ -284,6 +284,7 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   const TetgenResult out = tetrahedralize_in_child(in, sw.str());
   TetField field;
   field.input_vertices = nv;
+  field.spacing = h;
   field.vertices.resize(out.points.size() / 3);
   for (std::size_t v = 0; v < field.vertices.size(); ++v)
     field.vertices[v] = {out.points[3 * v], out.points[3 * v + 1], out.points[3 * v + 2]};

@@ -45,6 +45,12 @@ struct InputLoop {
   double transfer_ms = 0;        // wall time of this loop's transfer and check (a diagnostic)
 };
 
+struct ShortenResult;
+
+// Where each point of a shortened loop lies on `mesh` (its vertex, or its edge and parameter), from the strip
+// shorten_loop ran through (an unshortened result: its edge path's vertices).
+std::vector<InputPoint> locate_loop_points(const SurfaceMesh& mesh, const MeshAdjacency& adj, const ShortenResult& shortened);
+
 struct InputLoopOptions {
   bool shorten = true;
   int max_rings = 12;  // band of the shortening on the input mesh (ShortenOptions::max_rings)

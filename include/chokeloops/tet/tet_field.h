@@ -28,6 +28,7 @@ struct TetField {
   std::vector<double> values;                   // signed distance to the input surface, per vertex
   std::vector<char> inside_tets;                // per tet: inside the input surface (a walk across faces from the box)
   std::int32_t input_vertices = 0;
+  double spacing = 0;                           // of the lattice of interior points
   double seconds_tetgen = 0, seconds_distance = 0;
 };
 
