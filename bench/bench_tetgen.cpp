@@ -4,7 +4,7 @@
 // depth, the loop stage (loops traced and found, time per loop), peak RSS. Each path runs in its own child
 // process per run (peak RSS per path); medians over --runs.
 //
-//   bench_tetgen [--runs 3] [--data data] [--only NAME] [--cells C] [--resolution 256]
+//   bench_tetgen [--runs 3] [--data data] [--only NAME] [--cells C] [--grading G] [--resolution 256]
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -34,7 +34,7 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 // One path on one model, in this (child) process.
-Figures run_path(const std::string& file, bool tet, double cells, int resolution) {
+Figures run_path(const std::string& file, bool tet, double cells, double grading, int resolution) {
   Figures f;
   auto t = std::chrono::steady_clock::now();
   const TriangleMesh mesh = read_mesh(file);
@@ -45,6 +45,7 @@ Figures run_path(const std::string& file, bool tet, double cells, int resolution
   if (tet) {
     TetOptions o;
     o.default_cells = cells;
+    o.grading = grading;
     const TetAnalysis a = analyze_tet_complex(mesh, o, {});
     for (const char* stage : {"tetgen", "distance", "persistence", "chokes", "loops"}) f[stage] = a.timings_ms.at(stage);
     f["tets"] = double(a.tets);
@@ -85,7 +86,7 @@ Figures run_path(const std::string& file, bool tet, double cells, int resolution
 }
 
 // run_path in a forked child; its figures come back through a pipe, its peak RSS from wait4.
-Figures run_in_child(const std::string& file, bool tet, double cells, int resolution, std::string& error) {
+Figures run_in_child(const std::string& file, bool tet, double cells, double grading, int resolution, std::string& error) {
   int fd[2];
   if (pipe(fd) != 0) return error = "pipe failed", Figures{};
   const pid_t pid = fork();
@@ -93,7 +94,7 @@ Figures run_in_child(const std::string& file, bool tet, double cells, int resolu
     close(fd[0]);
     FILE* out = fdopen(fd[1], "w");
     try {
-      for (const auto& [k, v] : run_path(file, tet, cells, resolution)) std::fprintf(out, "%s\t%.9g\n", k.c_str(), v);
+      for (const auto& [k, v] : run_path(file, tet, cells, grading, resolution)) std::fprintf(out, "%s\t%.9g\n", k.c_str(), v);
     } catch (const std::exception& e) {
       std::fprintf(out, "error\t%s\n", e.what());
     }
@@ -128,7 +129,7 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   int runs = 3, resolution = 256;
-  double cells = 64;
+  double cells = 64, grading = 2;
   std::string data = CHOKELOOPS_SOURCE_DIR "/data", only;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -136,9 +137,10 @@ int main(int argc, char** argv) {
     else if (a == "--data" && i + 1 < argc) data = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--cells" && i + 1 < argc) cells = std::atof(argv[++i]);
+    else if (a == "--grading" && i + 1 < argc) grading = std::atof(argv[++i]);
     else if (a == "--resolution" && i + 1 < argc) resolution = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_tetgen [--runs 3] [--data data] [--only NAME] [--cells C] [--resolution 256]\n");
+      std::fprintf(stderr, "usage: bench_tetgen [--runs 3] [--data data] [--only NAME] [--cells C] [--grading G] [--resolution 256]\n");
       return 2;
     }
   }
@@ -146,14 +148,15 @@ int main(int argc, char** argv) {
       {"armadillo", "armadillo_libigl.obj"}, {"bunny", "bunny_libigl.off"},     {"david", "david_booleans.obj"},
       {"fertility", "fertility_libigl.off"}, {"fertility (vmas)", "fertility_vmas.off"},   {"kitten", "kitten_niagara.obj"}, {"neptune", "neptune_vmas.off"},
       {"genus3", "genus3_directional.off"}};
-  std::printf("lattice: box diagonal / %g; grid: %d voxels along the longest side; medians of %d, ms\n", cells, resolution, runs);
+  std::printf("samples: finest spacing box diagonal / %g, grading %g; grid: %d voxels along the longest side; medians of %d, ms\n", cells,
+              grading, resolution, runs);
   for (const auto& [name, file] : models) {
     if (!only.empty() && name != only) continue;
     for (const bool tet : {true, false}) {
       std::map<std::string, std::vector<double>> all;
       std::string error;
       for (int r = 0; r < runs && error.empty(); ++r)
-        for (const auto& [k, v] : run_in_child(data + "/meshes/" + file, tet, cells, resolution, error)) all[k].push_back(v);
+        for (const auto& [k, v] : run_in_child(data + "/meshes/" + file, tet, cells, grading, resolution, error)) all[k].push_back(v);
       std::printf("%-10s %-5s", name.c_str(), tet ? "tet" : "grid");
       if (!error.empty()) {
         std::printf(" error: %s", error.c_str());

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <chrono>
 #include <cctype>
@@ -44,8 +45,10 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
   --complex grid|tetgen     grid (default): the engine's implicit complex; tetgen: a closed, manifold mesh's
                             TetGen tetrahedralization (the paper's pipeline, a reference): the loops lie
                             on the input's own edges; loops.json ("complex": "tetgen") and chokes.csv
-  --tet-spacing H           tetgen: spacing of the interior sample points, input units (default: the box's
-                            diagonal / 64)
+  --tet-spacing H           tetgen: finest spacing of the sample points inside and outside, input units
+                            (default: the box's diagonal / 64)
+  --tet-grading G           tetgen: sample points graded, cells up to G times their distance to the surface
+                            (default 2); 0: a uniform lattice of the spacing
   --tet-quality Q           tetgen: also refine to a radius-edge ratio Q > 1 (TetGen -q; slow with the surface
                             kept, and it may not end on a mesh of thin triangles)
   --tet-max-volume V        tetgen: also refine to tets of volume V at most, input units cubed (TetGen -a)
@@ -174,7 +177,7 @@ int run(std::vector<std::string> args) {
   cli::VolumeCliOptions vo;
   bool max_loops_given = false;
   bool tetgen = false;
-  double tet_spacing = 0, tet_quality = 0, tet_max_volume = 0;
+  double tet_spacing = 0, tet_quality = 0, tet_max_volume = 0, tet_grading = -1;
   cli::Args in("analyze", std::move(args));
   while (in.next()) {
     if (in.is("-h", "--help")) { std::cout << kUsage; return 0; }
@@ -227,6 +230,9 @@ int run(std::vector<std::string> args) {
       const std::string v = in.value();
       if (v != "grid" && v != "tetgen") throw Error("--complex must be grid or tetgen (" + in.see_help() + ")");
       tetgen = v == "tetgen";
+    } else if (in.is("--tet-grading")) {
+      tet_grading = in.number();
+      if (!(tet_grading >= 0) || !std::isfinite(tet_grading)) throw Error("--tet-grading must be 0 or positive (" + in.see_help() + ")");
     } else if (in.is("--tet-spacing")) {
       tet_spacing = in.number();
       if (!(tet_spacing > 0)) throw Error("--tet-spacing must be positive (" + in.see_help() + ")");
@@ -271,12 +277,13 @@ int run(std::vector<std::string> args) {
   if (tetgen) {
     TetOptions tet;
     tet.spacing = tet_spacing;
+    if (tet_grading >= 0) tet.grading = tet_grading;
     tet.radius_edge = tet_quality;
     tet.max_volume = tet_max_volume;
     return run_tetgen(input, outdir, tet, options.chokes, !grid_flags.empty() || options.resolution_auto, view);
   }
-  if (tet_spacing > 0 || tet_quality > 0 || tet_max_volume > 0)
-    throw Error("--tet-spacing, --tet-quality and --tet-max-volume apply to --complex tetgen only");
+  if (tet_spacing > 0 || tet_quality > 0 || tet_max_volume > 0 || tet_grading >= 0)
+    throw Error("--tet-spacing, --tet-grading, --tet-quality and --tet-max-volume apply to --complex tetgen only");
   if (is_molecule_path(input)) {
     if (!grid_flags.empty() || options.resolution_auto)
       throw Error("--resolution does not apply to molecules; use --voxel-size in Å (" + std::string("see chokeloops analyze --help") + ")");

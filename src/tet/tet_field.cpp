@@ -16,6 +16,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cerrno>
 #include <cmath>
@@ -195,6 +196,100 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+
+// The points inside and outside where the function is sampled, besides the input's vertices.
+// grading = 0: a lattice of spacing h over the box. grading > 0: the centres of an octree's leaves, a cell being
+// split while it is larger than h and than `grading` times the distance from its centre to the surface (or
+// while it is not inside the box): samples as fine as the lattice's near the surface and across thin parts
+// (a handle of radius r gets cells of about grading * r, so a sample reaches its core), coarse deep inside
+// thick parts and far outside, where the lattice spent most of its points. Either way points nearer the surface
+// than half their spacing are left out: they would only make slivers. Deterministic, built in parallel.
+std::vector<std::array<double, 3>> sample_points(const Tree& tree, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                                                 double h, double grading) {
+  constexpr double kMaxPoints = 2e8;
+  auto distance = [&](const std::array<double, 3>& p) { return std::sqrt(tree.squared_distance(K::Point_3(p[0], p[1], p[2]))); };
+  if (grading <= 0) {
+    std::array<int, 3> cells;
+    double lattice_points = 1;
+    for (int a = 0; a < 3; ++a) cells[std::size_t(a)] = std::max(1, int(std::floor((hi[std::size_t(a)] - lo[std::size_t(a)]) / h))),
+                                lattice_points *= cells[std::size_t(a)] - 1;
+    if (lattice_points > kMaxPoints) throw Error("--tet-spacing is too fine: " + std::to_string(std::int64_t(lattice_points)) + " interior points", 3);
+    std::vector<std::array<double, 3>> extra;
+    for (int k = 1; k < cells[2]; ++k)
+      for (int j = 1; j < cells[1]; ++j)
+        for (int i = 1; i < cells[0]; ++i) extra.push_back({lo[0] + i * h, lo[1] + j * h, lo[2] + k * h});
+    std::vector<char> keep(extra.size());
+    tbb::parallel_for(std::size_t(0), extra.size(), [&](std::size_t e) { keep[e] = distance(extra[e]) >= 0.5 * h; });
+    std::size_t kept = 0;
+    for (std::size_t e = 0; e < extra.size(); ++e)
+      if (keep[e]) extra[kept++] = extra[e];
+    extra.resize(kept);
+    return extra;
+  }
+  // Top cells of h * 2^k, about a quarter of the box's longest side, tiling the box from its low corner.
+  double side = 0;
+  for (int a = 0; a < 3; ++a) side = std::max(side, hi[std::size_t(a)] - lo[std::size_t(a)]);
+  double top = h;
+  while (top * 2 <= side / 4) top *= 2;
+  std::array<int, 3> n;
+  for (int a = 0; a < 3; ++a) n[std::size_t(a)] = int(std::ceil((hi[std::size_t(a)] - lo[std::size_t(a)]) / top));
+  const std::size_t tops = std::size_t(n[0]) * std::size_t(n[1]) * std::size_t(n[2]);
+  std::vector<std::vector<std::array<double, 3>>> found(tops);
+  std::atomic<std::int64_t> total{0};
+  tbb::parallel_for(std::size_t(0), tops, [&](std::size_t c) {
+    struct Cell { std::array<double, 3> low; double size; };
+    std::vector<Cell> stack{{{lo[0] + top * double(c % std::size_t(n[0])), lo[1] + top * double(c / std::size_t(n[0]) % std::size_t(n[1])),
+                              lo[2] + top * double(c / (std::size_t(n[0]) * std::size_t(n[1])))}, top}};
+    auto& out = found[c];
+    while (!stack.empty()) {
+      const Cell cell = stack.back();
+      stack.pop_back();
+      const double half = cell.size / 2;
+      const std::array<double, 3> centre{cell.low[0] + half, cell.low[1] + half, cell.low[2] + half};
+      bool inside_box = true;
+      for (int a = 0; a < 3; ++a)
+        inside_box = inside_box && cell.low[std::size_t(a)] >= lo[std::size_t(a)] - 1e-12 * side &&
+                     cell.low[std::size_t(a)] + cell.size <= hi[std::size_t(a)] + 1e-12 * side;
+      const auto nearest = tree.closest_point(K::Point_3(centre[0], centre[1], centre[2]));
+      const double d = std::sqrt(CGAL::squared_distance(nearest, K::Point_3(centre[0], centre[1], centre[2])));
+      // Across the medial axis (the core of a part, the middle of a hole) the directions from the nearest surface
+      // points turn by up to half a turn; there the depths are read, so those cells are split down to a quarter of
+      // their distance.
+      auto straddles_medial_axis = [&] {
+        std::array<std::array<double, 3>, 9> u;
+        for (int k = 0; k < 9; ++k) {
+          const K::Point_3 p = k == 8 ? K::Point_3(centre[0], centre[1], centre[2])
+                                      : K::Point_3(cell.low[0] + (k & 1) * cell.size, cell.low[1] + (k >> 1 & 1) * cell.size,
+                                                   cell.low[2] + (k >> 2 & 1) * cell.size);
+          const K::Point_3 q = k == 8 ? nearest : tree.closest_point(p);
+          const double len = std::sqrt(CGAL::squared_distance(p, q));
+          if (len <= 0) return true;
+          u[std::size_t(k)] = {(p.x() - q.x()) / len, (p.y() - q.y()) / len, (p.z() - q.z()) / len};
+        }
+        for (int a = 0; a < 9; ++a)
+          for (int b = a + 1; b < 9; ++b)
+            if (u[std::size_t(a)][0] * u[std::size_t(b)][0] + u[std::size_t(a)][1] * u[std::size_t(b)][1] +
+                    u[std::size_t(a)][2] * u[std::size_t(b)][2] < 0.5)
+              return true;
+        return false;
+      };
+      if (cell.size > 1.5 * h &&
+          (!inside_box || cell.size > grading * d || (cell.size > d / 4 && straddles_medial_axis()))) {
+        for (int k = 7; k >= 0; --k)  // popped in octant order 0..7
+          stack.push_back({{cell.low[0] + (k & 1) * half, cell.low[1] + (k >> 1 & 1) * half, cell.low[2] + (k >> 2 & 1) * half}, half});
+        continue;
+      }
+      if (!inside_box || d < half) continue;
+      out.push_back(centre);
+      if (++total > std::int64_t(kMaxPoints)) throw Error("--tet-spacing is too fine: over " + std::to_string(std::int64_t(kMaxPoints)) + " interior points", 3);
+    }
+  });
+  std::vector<std::array<double, 3>> extra;
+  extra.reserve(std::size_t(total.load()));
+  for (const auto& f : found) extra.insert(extra.end(), f.begin(), f.end());
+  return extra;
+}
+
 }  // namespace
 
 TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions& options) {
@@ -225,27 +320,9 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   Tree tree(triangles.begin(), triangles.end());
   tree.accelerate_distance_queries();
 
-  // Points inside and outside where the function is sampled: a lattice over the box (the grid path's samples, in
-  // effect), less those nearer the surface than half its spacing, where they would only make slivers.
+  // Points inside and outside where the function is sampled (sample_points).
   const double h = options.spacing > 0 ? options.spacing : diagonal / options.default_cells;
-  std::array<int, 3> cells;
-  double lattice_points = 1;
-  for (int a = 0; a < 3; ++a) cells[std::size_t(a)] = std::max(1, int(std::floor((hi[std::size_t(a)] - lo[std::size_t(a)]) / h))),
-                              lattice_points *= cells[std::size_t(a)] - 1;
-  if (lattice_points > 2e8) throw Error("--tet-spacing is too fine: " + std::to_string(std::int64_t(lattice_points)) + " interior points", 3);
-  std::vector<std::array<double, 3>> extra;
-  for (int k = 1; k < cells[2]; ++k)
-    for (int j = 1; j < cells[1]; ++j)
-      for (int i = 1; i < cells[0]; ++i) extra.push_back({lo[0] + i * h, lo[1] + j * h, lo[2] + k * h});
-  std::vector<char> keep(extra.size());
-  tbb::parallel_for(std::size_t(0), extra.size(), [&](std::size_t e) {
-    const auto& p = extra[e];
-    keep[e] = tree.squared_distance(K::Point_3(p[0], p[1], p[2])) >= 0.25 * h * h;
-  });
-  std::size_t kept = 0;
-  for (std::size_t e = 0; e < extra.size(); ++e)
-    if (keep[e]) extra[kept++] = extra[e];
-  extra.resize(kept);
+  const std::vector<std::array<double, 3>> extra = sample_points(tree, lo, hi, h, options.grading);
 
   // The input: the mesh's vertices, the box's 8 corners, the lattice; its triangles, then the box's 6 quads.
   tetgenio in;

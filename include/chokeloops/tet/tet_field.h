@@ -15,8 +15,11 @@ namespace chokeloops {
 // refinement (-q, -a) keeping the input surface (-Y) is slow (24 s for 155K tets on a 12K-vertex torus) and with
 // -q can run without end on a mesh of thin triangles, so the default samples a lattice of points instead.
 struct TetOptions {
-  double spacing = 0;          // lattice of interior points, input units; 0: the box's diagonal / default_cells
+  double spacing = 0;          // finest spacing of the sample points, input units; 0: the box's diagonal / default_cells
   double default_cells = 64;
+  // 0: a uniform lattice of `spacing`; > 0: graded, an octree's cells split while larger than `spacing` and than
+  // grading times their distance to the surface (tet_field.cpp: sample_points).
+  double grading = 2;
   double radius_edge = 0;      // TetGen -q: largest radius-edge ratio of a tet (> 1; 0: no -q)
   double max_volume = 0;       // TetGen -a: largest tet volume in input units cubed; 0: no -a
   double padding = 0.1;        // the box around the mesh, as a fraction of its bounding box's diagonal
@@ -28,7 +31,7 @@ struct TetField {
   std::vector<double> values;                   // signed distance to the input surface, per vertex
   std::vector<char> inside_tets;                // per tet: inside the input surface (a walk across faces from the box)
   std::int32_t input_vertices = 0;
-  double spacing = 0;                           // of the lattice of interior points
+  double spacing = 0;                           // finest spacing of the sample points
   double seconds_tetgen = 0, seconds_distance = 0;
 };
 
