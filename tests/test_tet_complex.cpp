@@ -12,6 +12,7 @@
 
 #include <tbb/global_control.h>
 
+#include "chokeloops/analyze.h"
 #include "chokeloops/field/analytic.h"
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/io/mesh_io.h"
@@ -257,6 +258,31 @@ TEST(TetLoops, DumbbellNeckLoopCirclesTheNeck) {
   EXPECT_NEAR(necks[0]->loop.length, 2 * kPi * 0.12, 0.05 * 2 * kPi * 0.12);
   EXPECT_NEAR(std::abs(necks[0]->loop.normal[0]), 1.0, 0.02);
   EXPECT_TRUE(necks[0]->separating);
+}
+
+TEST(TetLoops, KittensLoopsAreTheGridPathsLoopsCarriedToTheSameMesh) {
+  // Two complexes, one answer: each loop traced on TetGen's complex has the length of the grid path's loop of the
+  // same side and kind carried onto the input mesh (input_loops.h), within 1%.
+  const std::string file = std::string(CHOKELOOPS_DATA) + "/meshes/kitten_euclid.off";
+  AnalyzeOptions options;
+  options.levelset.quiet = true;
+  const AnalyzeResult grid = analyze(file, options);
+  const TetAnalysis tet = analyze_tet_complex(read_mesh(file), {}, options.chokes);
+  ASSERT_TRUE(grid.has_input_loops);
+  for (Side side : {Side::Handle, Side::Tunnel})
+    for (Kind kind : {Kind::Generator, Kind::Choke}) {
+      SCOPED_TRACE(std::string(to_string(side)) + " " + to_string(kind));
+      std::vector<double> on_grid, on_tets;
+      for (const InputLoop& l : grid.input_loops)
+        if (l.loop.found && l.loop.choke.side == side && l.loop.choke.kind == kind) on_grid.push_back(l.loop.length);
+      for (const InputLoop* l : loops_of(tet, side, kind))
+        if (l->loop.found) on_tets.push_back(l->loop.length);
+      std::sort(on_grid.begin(), on_grid.end());
+      std::sort(on_tets.begin(), on_tets.end());
+      ASSERT_EQ(on_tets.size(), on_grid.size());
+      for (std::size_t i = 0; i < on_tets.size(); ++i) EXPECT_NEAR(on_tets[i], on_grid[i], 0.01 * on_grid[i]);
+    }
+  EXPECT_EQ(tet.loops.size(), 3u);
 }
 
 TEST(TetLoops, LoopsAreTheSameForOneAndTwoThreads) {
