@@ -170,11 +170,16 @@ TEST(CliAnalyze, TetgenComplexWritesTheChokesAndLoopsOfAClosedMeshAndRefusesOthe
   for (const std::string& bad : {"/meshes/fertility_vmas.off' --complex tetgen", "/molecules/2kix.pdb' --complex tetgen",
                                  "/meshes/kitten_euclid.off' --complex tetgen --resolution 64",
                                  "/meshes/kitten_euclid.off' --tet-spacing 4", "/meshes/kitten_euclid.off' --complex tets",
-                                 "/meshes/kitten_euclid.off' --complex tetgen --tet-quality 1"}) {
+                                 "/meshes/kitten_euclid.off' --complex tetgen --tet-quality 1",
+                                 "/meshes/kitten_euclid.off' --complex tetgen --tet-grading -1",
+                                 "/meshes/kitten_euclid.off' --tet-grading 1"}) {
     o = run_cli("analyze '" + data + bad + " -o '" + dir.string() + "'");
     EXPECT_EQ(o.code, 2) << bad;
     EXPECT_EQ(lines(o.err), 1) << bad << ": " << o.err;
   }
+  o = run_cli("analyze '" + data + "/meshes/kitten_euclid.off' -o '" + dir.string() + "' --complex tetgen --max-memory 20M");
+  EXPECT_EQ(o.code, 3) << o.err;
+  EXPECT_EQ(lines(o.err), 1) << o.err;
   fs::remove_all(dir);
 }
 #endif

@@ -302,6 +302,25 @@ TEST(TetComplex, OpenMeshIsRefusedWithTheEdgeAtFault) {
   expect_refused(m, "closed, manifold");
 }
 
+TEST(TetComplex, SamplesBeyondTheMemoryLimitAreRefusedBeforeTetGenRuns) {
+  // 6 KB a vertex: 2 MB holds the torus's ~3K input vertices but not its samples at the default spacing.
+  const TriangleMesh mesh = mesh_of(extract_zero_surface(sample_field({40, 40, 40}, analytic::torus(0.3, 0.1))));
+  TetOptions o;
+  o.max_memory = std::size_t(2) << 20;
+  for (const double grading : {0.0, 2.0}) {
+    o.grading = grading;
+    try {
+      tetrahedralize_with_distance(mesh, o);
+      FAIL() << "grading " << grading << ": 2 MB was enough";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.exit_code, 3);
+      EXPECT_NE(std::string(e.what()).find("--max-memory"), std::string::npos) << e.what();
+    }
+  }
+  o.max_memory = std::size_t(1) << 30;
+  EXPECT_GT(tetrahedralize_with_distance(mesh, o).tets.size(), 0u);
+}
+
 TEST(TetComplex, SelfIntersectingMeshIsRefusedBeforeTetGenSeesIt) {
   // Two closed tetrahedra, the second's apex through the first's base.
   TriangleMesh m{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, -0.5}, {1.2, 0.2, -0.5}, {0.2, 1.2, -0.5}, {0.2, 0.2, 0.5}},

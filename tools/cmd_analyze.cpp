@@ -278,6 +278,7 @@ int run(std::vector<std::string> args) {
     TetOptions tet;
     tet.spacing = tet_spacing;
     if (tet_grading >= 0) tet.grading = tet_grading;
+    tet.max_memory = options.levelset.max_memory;
     tet.radius_edge = tet_quality;
     tet.max_volume = tet_max_volume;
     return run_tetgen(input, outdir, tet, options.chokes, !grid_flags.empty() || options.resolution_auto, view);

@@ -4,6 +4,7 @@
 // the mesh at every vertex (negative inside, 0 on the input's own vertices). The reference path beside the
 // grid engine (`--complex tetgen`): an independent triangulation, and the pipeline the paper timed.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -23,6 +24,7 @@ struct TetOptions {
   double radius_edge = 0;      // TetGen -q: largest radius-edge ratio of a tet (> 1; 0: no -q)
   double max_volume = 0;       // TetGen -a: largest tet volume in input units cubed; 0: no -a
   double padding = 0.1;        // the box around the mesh, as a fraction of its bounding box's diagonal
+  std::size_t max_memory = 0;  // bytes the path may use (checked before TetGen runs); 0: default_max_memory()
 };
 
 struct TetField {
@@ -36,7 +38,7 @@ struct TetField {
 };
 
 // Throws Error (exit 2) for a mesh that is not closed and manifold, or that TetGen refuses (self-intersecting
-// or touching facets); exit 3 when TetGen runs out of memory.
+// or touching facets); exit 3 when the samples would need more than max_memory, or TetGen runs out of memory.
 TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions& options = {});
 
 }  // namespace chokeloops
