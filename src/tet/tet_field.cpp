@@ -329,11 +329,16 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   // the simplices and PHAT's columns); the guard counts 6 KB.
   constexpr double kBytesPerVertex = 6144;
   const double limit = double(options.max_memory ? options.max_memory : default_max_memory());
+  auto size = [](double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, bytes < 1e9 ? "%.0f MB" : "%.1f GB", bytes < 1e9 ? bytes / 1e6 : bytes / 1e9);
+    return std::string(text);
+  };
   auto too_many = [&](double points) {
-    char text[256];
-    std::snprintf(text, sizeof text, "--complex tetgen would need about %.1f GB for %.3g vertices (limit %.1f GB): use a coarser --tet-spacing "
-                  "or a larger --tet-grading, or raise --max-memory", (points + nv) * kBytesPerVertex / 1e9, points + nv, limit / 1e9);
-    return Error(text, 3);
+    char count[32];
+    std::snprintf(count, sizeof count, "%.3g", points + nv);
+    return Error("--complex tetgen would need more than " + size((points + nv) * kBytesPerVertex) + " for " + count +
+                 " vertices (limit " + size(limit) + "): use a coarser --tet-spacing or a larger --tet-grading, or raise --max-memory", 3);
   };
   const double max_points = limit / kBytesPerVertex - nv;
   if (max_points < 0) throw too_many(0);
