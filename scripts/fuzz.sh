@@ -15,6 +15,8 @@
 #   FUZZ_TIMEOUT=S       an input running longer than S seconds is a finding (default 20; raise it for a long run
 #                        that will be paused with SIGSTOP while something else is measured: the clock runs on)
 #   FUZZ_ASAN_OPTIONS=O  more ASAN_OPTIONS for the harnesses (detect_leaks=0 is always set)
+#   FUZZ_FORK=N          libFuzzer's fork mode: N worker processes share one run, its executions counted together
+#                        (one core each; a crash in a worker is reported as usual and ends the run)
 #   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -44,6 +46,7 @@ for name in "${NAMES[@]}"; do
     vdb_levelset) max_len=2565 ;;                   # 512 values of 5 bytes after a 5-byte header
   esac
   max_len="${FUZZ_MAX_LEN:-$max_len}"
+  if [ -n "${FUZZ_FORK:-}" ]; then extra+=(-fork="$FUZZ_FORK"); fi
   start=$(date +%s)
   stamp="$findings/.started"; touch "$stamp"  # findings of earlier runs stay, and are not counted again
   ASAN_OPTIONS="detect_leaks=0${FUZZ_ASAN_OPTIONS:+:$FUZZ_ASAN_OPTIONS}" "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
