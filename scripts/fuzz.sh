@@ -17,6 +17,7 @@
 #   FUZZ_ASAN_OPTIONS=O  more ASAN_OPTIONS for the harnesses (detect_leaks=0 is always set)
 #   FUZZ_FORK=N          libFuzzer's fork mode: N worker processes share one run, its executions counted together
 #                        (one core each; a crash in a worker is reported as usual and ends the run)
+#   FUZZ_ARGS="..."      more libFuzzer flags, e.g. -entropic=0 (mesh_levelset: 2.2x the executions a second)
 #   JOBS=N               build parallelism (default 2); BUILD_DIR (default build-fuzz)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -47,6 +48,7 @@ for name in "${NAMES[@]}"; do
   esac
   max_len="${FUZZ_MAX_LEN:-$max_len}"
   if [ -n "${FUZZ_FORK:-}" ]; then extra+=(-fork="$FUZZ_FORK"); fi
+  if [ -n "${FUZZ_ARGS:-}" ]; then read -r -a more <<<"$FUZZ_ARGS"; extra+=("${more[@]}"); fi
   start=$(date +%s)
   stamp="$findings/.started"; touch "$stamp"  # findings of earlier runs stay, and are not counted again
   ASAN_OPTIONS="detect_leaks=0${FUZZ_ASAN_OPTIONS:+:$FUZZ_ASAN_OPTIONS}" "$BUILD/fuzz_$name" -max_total_time="$SECONDS_PER" -runs="$RUNS" -max_len="$max_len" \
