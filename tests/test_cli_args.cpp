@@ -161,10 +161,13 @@ TEST(CliAnalyze, TetgenComplexWritesTheChokesAndLoopsOfAClosedMeshAndRefusesOthe
   const nlohmann::json j = nlohmann::json::parse(json_file);
   EXPECT_EQ(j.at("complex"), "tetgen");
   int verified_generators = 0;
-  for (const auto& l : j.at("loops"))
+  for (const auto& l : j.at("loops")) {
+    // The choke simplex by its vertices: a handle's edge, a tunnel's triangle.
+    EXPECT_EQ(l.at("choke_simplex").at("vertices").size(), l.at("side") == "handle" ? 2u : 3u) << l.at("choke_simplex");
     if (l.at("kind") == "generator" && l.at("found") && l.at("verified") && l.at("check") == "non-contractible" &&
         l.at("edge_path").size() >= 3 && l.at("input_points").size() == l.at("points").size())
       ++verified_generators;
+  }
   EXPECT_EQ(verified_generators, 2);
   EXPECT_TRUE(fs::exists(dir / "surface.ply") && fs::exists(dir / "loops.ply") && fs::exists(dir / "loops.obj"));
   for (const std::string& bad : {"/meshes/fertility_vmas.off' --complex tetgen", "/molecules/2kix.pdb' --complex tetgen",

@@ -41,7 +41,7 @@ std::string tet_report_json(const TetAnalysis& a, const ChokeParameters& params,
     json e = detail::loop_fields_json(l.loop, i, WorldFrame{});
     const Choke& k = l.loop.choke;
     json vertices = json::array();
-    if (k.simplex >= 0 && std::size_t(k.simplex) < a.simplices.size())
+    if (k.simplex >= 0 && std::size_t(k.simplex) < a.pair_simplices.size())
       for (std::int32_t v : a.pair_simplices[std::size_t(k.simplex)])
         if (v >= 0) vertices.push_back(v);
     e["choke_simplex"] = {{"dim", k.simplex_dim}, {"vertices", vertices}, {"saddle_vertex", k.saddle}};
