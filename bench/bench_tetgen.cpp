@@ -47,7 +47,7 @@ Figures run_path(const std::string& file, bool tet, double cells, double grading
     o.default_cells = cells;
     o.grading = grading;
     const TetAnalysis a = analyze_tet_complex(mesh, o, {});
-    for (const char* stage : {"tetgen", "distance", "persistence", "chokes", "loops"}) f[stage] = a.timings_ms.at(stage);
+    for (const char* stage : {"tetgen", "distance", "persistence", "chokes"}) f[stage] = a.timings_ms.at(stage);
     f["tets"] = double(a.tets);
     f["vertices"] = double(a.vertices);
     genus_pairs = a.chokes.handle_generators;

@@ -199,13 +199,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-
 // The points inside and outside where the function is sampled, besides the input's vertices.
 // grading = 0: a lattice of spacing h over the box. grading > 0: the centres of an octree's leaves, a cell being
-// split while it is larger than h and than `grading` times the distance from its centre to the surface (or
-// while it is not inside the box): samples as fine as the lattice's near the surface and across thin parts
-// (a handle of radius r gets cells of about grading * r, so a sample reaches its core), coarse deep inside
-// thick parts and far outside, where the lattice spent most of its points. Either way points nearer the surface
+// split while it is larger than h and either than `grading` times the distance from its centre to the surface,
+// or than a quarter of it where the cell straddles the medial axis (or while it is not inside the box): samples
+// as fine as the lattice's near the surface, and at the core of every part and the middle of every hole, where
+// the depths are read; coarse elsewhere, deep inside thick parts and far outside, where the lattice spent most
+// of its points. Either way points nearer the surface
 // than half their spacing are left out: they would only make slivers. Deterministic, built in parallel.
 std::vector<std::array<double, 3>> sample_points(const Tree& tree, const std::array<double, 3>& lo, const std::array<double, 3>& hi,
                                                  double h, double grading, double max_points,
@@ -344,7 +344,7 @@ TetField tetrahedralize_with_distance(const TriangleMesh& mesh, const TetOptions
   if (max_points < 0) throw too_many(0);
   const std::vector<std::array<double, 3>> extra = sample_points(tree, lo, hi, h, options.grading, max_points, too_many);
 
-  // The input: the mesh's vertices, the box's 8 corners, the lattice; its triangles, then the box's 6 quads.
+  // The input: the mesh's vertices, the box's 8 corners, the samples; its triangles, then the box's 6 quads.
   tetgenio in;
   in.firstnumber = 0;
   const int n_points = nv + 8 + int(extra.size());

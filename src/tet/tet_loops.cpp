@@ -123,6 +123,7 @@ class ChokeTracer {
       out.loop.note = "the choke has no saddle vertex on the complex";
       return;
     }
+    lobes_ = lobe_candidates();
     double seed_radius = c_.depth + cx_.options.box_margin * cx_.unit;
     double r = cx_.options.box_factor * c_.depth + cx_.options.box_margin * cx_.unit;
     std::string why = "the membrane did not close on the input surface in any ball up to the whole box";
@@ -215,7 +216,7 @@ class ChokeTracer {
     s_.set(saddle_, 3);  // the saddle joins the pieces: neither seed grows through it
     std::vector<std::int32_t> seeds;
     int lobes = 0;
-    for (std::int32_t v : lobe_candidates()) {
+    for (std::int32_t v : lobes_) {
       if (lobes == 2) break;
       if (!below(v) || s_.zone[std::size_t(v)] != 0) continue;
       if (!grow_piece(v, std::uint8_t(lobes + 1), seed_radius, seeds)) {
@@ -269,7 +270,6 @@ class ChokeTracer {
         s_.face_zone[std::size_t(f)] = std::int8_t(ones > twos ? 1 : 2);
         s_.faces.push_back(f);
       }
-    std::sort(s_.faces.begin(), s_.faces.end());
     auto zone_of_face = [&](int h) { return h < 0 ? 0 : int(s_.face_zone[std::size_t(MeshAdjacency::face(h))]); };
     auto is_boundary = [&](int h) { return zone_of_face(adj.twin[std::size_t(h)]) != 1; };
     auto next_boundary = [&](int h) {
@@ -285,17 +285,18 @@ class ChokeTracer {
         for (int k = 0; k < 3; ++k)
           if (is_boundary(3 * f + k)) boundary.push_back(3 * f + k);
     std::sort(boundary.begin(), boundary.end());
-    std::vector<int> done;
-    for (int h0 : boundary) {
-      if (std::binary_search(done.begin(), done.end(), h0)) continue;
+    std::vector<char> done(boundary.size(), 0);  // per boundary half-edge, in `boundary`'s order
+    auto index_of = [&](int h) { return std::size_t(std::lower_bound(boundary.begin(), boundary.end(), h) - boundary.begin()); };
+    for (std::size_t i0 = 0; i0 < boundary.size(); ++i0) {
+      if (done[i0]) continue;
       std::vector<int> cycle;
+      const int h0 = boundary[i0];
       int h = h0;
       do {
         cycle.push_back(h);
+        done[index_of(h)] = 1;
         h = next_boundary(h);
       } while (h != h0 && cycle.size() <= boundary.size());
-      done.insert(done.end(), cycle.begin(), cycle.end());
-      std::sort(done.begin(), done.end());
       split_into_simple(cycle, zone_of_face, candidates);
     }
     // Nearest first.
@@ -382,6 +383,7 @@ class ChokeTracer {
   const std::int32_t saddle_;
   const Neighbours& adjacency_;
   const P3 centre_;
+  std::vector<std::int32_t> lobes_;  // lobe_candidates(), the same for every flood of this choke
 };
 
 }  // namespace

@@ -14,7 +14,8 @@ namespace chokeloops {
 
 // Where the function is sampled decides the depths' accuracy, as the voxel does on the grid. TetGen's own
 // refinement (-q, -a) keeping the input surface (-Y) is slow (24 s for 155K tets on a 12K-vertex torus) and with
-// -q can run without end on a mesh of thin triangles, so the default samples a lattice of points instead.
+// -q can run without end on a mesh of thin triangles, so the points inside and outside are chosen here: graded
+// by default, or a uniform lattice.
 struct TetOptions {
   double spacing = 0;          // finest spacing of the sample points, input units; 0: the box's diagonal / default_cells
   double default_cells = 64;
