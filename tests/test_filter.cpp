@@ -7,6 +7,7 @@
 
 #include "analytic_fields.h"
 #include "chokeloops/filter/filter.h"
+#include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/surface/surface.h"
 
 using namespace chokeloops;
@@ -115,6 +116,42 @@ TEST(Filter, FillsAThinHoleThroughABall) {
   EXPECT_EQ(r.edits[0].side, Side::Tunnel);  // the hole is filled, the ball is not cut through
   EXPECT_NEAR(r.edits[0].depth, 0.025, g.voxel_size);
   EXPECT_LT(r.voxels_changed, 60u);
+}
+
+// The thinning to a pinch (the filter's last resort) on shapes with one pair to remove: flipping what it returns
+// lowers the genus by one and changes nothing else, and it flips nothing deeper than the choke.
+void expect_thinning_removes_one_pair(const ScalarGrid& grid, Side side, double depth) {
+  const FilterSummary before = topology_summary(grid);
+  const ChokeSet chokes = find_chokes(grid, lower_star_persistence(grid), ChokeParameters{});
+  const Choke* generator = nullptr;
+  for (const Choke& c : chokes.chokes)
+    if (c.kind == Kind::Generator && c.side == side && std::abs(c.depth - depth) < 2 * grid.voxel_size) generator = &c;
+  ASSERT_NE(generator, nullptr);
+  const MembraneVoxels m = thinned_pinch_voxels(grid, *generator);
+  ASSERT_TRUE(m.found) << m.note;
+  ScalarGrid edited = grid;
+  const float moved = float(side == Side::Handle ? 0.5 : -0.5) * float(grid.voxel_size);
+  for (Id v : m.shore) {
+    EXPECT_LE(std::abs(grid.values[std::size_t(v)]), generator->depth + 0.5 * grid.voxel_size);
+    EXPECT_EQ(grid.values[std::size_t(v)] <= 0, side == Side::Handle);
+    edited.values[std::size_t(v)] = moved;
+  }
+  const FilterSummary after = topology_summary(edited);
+  EXPECT_EQ(after.genus, before.genus - 1);
+  EXPECT_EQ(after.components, before.components);
+  EXPECT_EQ(after.cavities, before.cavities);
+  // Only what the pinch needs is left: about the section of the handle (or of the hole), not the ball around it
+  // (measured 16 and 30 voxels, against sections of 39 and 36).
+  const double section = 3.14159 * std::pow(depth / grid.voxel_size + 1, 2);
+  EXPECT_LT(double(m.shore.size()), 1.2 * section) << m.shore.size() << " voxels";
+}
+
+TEST(Filter, ThinningToAPinchCutsTheBarOfATorus) {
+  expect_thinning_removes_one_pair(sample_field({128, 128, 128}, torus_with_bar()), Side::Handle, 0.02);
+}
+
+TEST(Filter, ThinningToAPinchFillsTheHoleThroughABall) {
+  expect_thinning_removes_one_pair(sample_field({96, 96, 96}, drilled_ball(0.025)), Side::Tunnel, 0.025);
 }
 
 TEST(Filter, CutModeCutsTheBallInsteadAndFillModeFillsTheBarsHole) {

@@ -90,8 +90,10 @@ std::string where(const Choke& c) {
 
 // What a noise pair's edit tries, in turn, while the check refuses it: its saddle alone, the other side's
 // saddle, its level piece, the other side's, the pinch nearest its saddle, the other side's, then its membrane
-// (a disc, not at the saddle). Each is tried in the next wave of the same round, with no persistence run between.
-enum Attempt { kSaddle, kOtherSaddle, kLevelPiece, kOtherLevelPiece, kPinch, kOtherPinch, kDisc };
+// (a disc, not at the saddle). Any pair whose disc fails (or does not close) is then thinned to a pinch on its
+// side, then on the other (thinned_pinch_voxels): that can neither join components nor open cavities. Each is
+// tried in the next wave of the same round, with no persistence run between.
+enum Attempt { kSaddle, kOtherSaddle, kLevelPiece, kOtherLevelPiece, kPinch, kOtherPinch, kDisc, kThin, kOtherThin };
 // An edit waiting to be applied, with its pair's generators, so that it can be made again.
 struct PendingEdit : FilterEdit {
   const Choke* first = nullptr;  // the generator chosen for the pair
@@ -238,8 +240,8 @@ BatchGroups group_changes(const ScalarGrid& grid, const FreudenthalComplex& cx, 
 // bridge) is made again by `remake` (the next Attempt) and waits for the next wave.
 std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit> edits, Analysis& now,
                                       std::optional<detail::SideLabels>& labels,
-                                      const std::function<bool(PendingEdit&, std::string&)>& remake,
-                                      int floor, std::vector<std::string>& notes,
+                                      const std::function<bool(PendingEdit&, std::string&, bool)>& remake,
+                                      int last_attempt, int floor, std::vector<std::string>& notes,
                                       std::vector<std::pair<Side, std::array<double, 3>>>& failed, double& t_labels,
                                       double& t_persistence) {
   const FreudenthalComplex cx(grid.dims);
@@ -249,7 +251,26 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
   // Waves: a batch is applied and judged until every group in it passes; edits that touched others that
   // failed with them wait for the next wave, judged on the field the batch left.
   while (!edits.empty() || !waiting.empty()) {
-    if (edits.empty()) edits = std::move(waiting), waiting.clear();
+    if (edits.empty()) {
+      edits = std::move(waiting), waiting.clear();
+      // A thinning is made again on the field as the waves before left it: its flips are simple only there.
+      std::vector<std::string> why_not(edits.size());
+      std::vector<char> ready(edits.size(), 1);
+      tbb::parallel_for(std::size_t(0), edits.size(), [&](std::size_t i) {
+        if (edits[i].attempt >= kThin) ready[i] = remake(edits[i], why_not[i], true);
+      });
+      std::vector<PendingEdit> still;
+      for (std::size_t i = 0; i < edits.size(); ++i) {
+        if (ready[i]) {
+          still.push_back(std::move(edits[i]));
+          continue;
+        }
+        failed.push_back({edits[i].side, edits[i].point});
+        notes.push_back(describe(edits[i]) + ": " + why_not[i] + ": undone");
+      }
+      edits = std::move(still);
+      if (edits.empty()) continue;
+    }
     const Undo undo = apply_edits(grid, edits);
     const BatchGroups groups = group_changes(grid, cx, edits, undo);
     const std::size_t n_groups = groups.edits.size();
@@ -314,7 +335,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
         for (std::size_t e : members) fate[e] = e == first ? Keep : Wait;
         continue;
       }
-      if (members.size() == 1 && edits[members[0]].attempt < kDisc && !v.on_border && !groups.vertices[gi].empty() &&
+      if (members.size() == 1 && edits[members[0]].attempt < last_attempt && !v.on_border && !groups.vertices[gi].empty() &&
           (v.euler_change <= 0 || !v.keeps_components || !v.keeps_cavities)) {
         fate[members[0]] = Remake;
         remake_why[members[0]] = why;
@@ -344,7 +365,7 @@ std::vector<FilterEdit> apply_checked(ScalarGrid& grid, std::vector<PendingEdit>
     // On the field before this batch, in parallel (each membrane is a flood of its own).
     std::vector<std::string> why_not(remade.size());
     std::vector<char> ready(remade.size());
-    tbb::parallel_for(std::size_t(0), remade.size(), [&](std::size_t r) { ready[r] = remake(edits[remade[r]], why_not[r]); });
+    tbb::parallel_for(std::size_t(0), remade.size(), [&](std::size_t r) { ready[r] = remake(edits[remade[r]], why_not[r], false); });
     for (std::size_t r = 0; r < remade.size(); ++r) {
       PendingEdit& e = edits[remade[r]];
       if (ready[r]) {
@@ -469,6 +490,43 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       (cut ? c.cut_voxels : c.fill_voxels) = membrane_of(g, !failed_before(g), shape);
     });
     t_membranes += ms_since(t_m);
+    // The next of a pair's attempts that closes (see Attempt): a noise pair's pieces at its saddle (the other
+    // side's only when it is as thin), its disc, then the thinning on either side.
+    // Thinning only for the pairs the rounds before could not remove: its edits are wider than a disc, and
+    // made early they change the field around pairs that a disc removes later.
+    const int last_attempt = wide_boxes ? kOtherThin : kDisc;
+    auto remake = [&](PendingEdit& e, std::string& why_not, bool again) {
+      const bool other_ok = e.other && e.other->depth < 0.5 * grid.voxel_size && !failed_before(*e.other);
+      std::string last;
+      for (int next = again ? e.attempt : e.attempt + 1; next <= last_attempt; ++next) {
+        const bool on_other = next == kOtherSaddle || next == kOtherLevelPiece || next == kOtherPinch || next == kOtherThin;
+        if (on_other && !(next == kOtherThin ? e.other != nullptr : other_ok)) continue;
+        const Choke& g = on_other ? *e.other : *e.first;
+        MembraneVoxels m;
+        if (next == kDisc) m = membrane_of(g, false, shape);
+        else if (next >= kThin) m = thinned_pinch_voxels(grid, g, options.can_change);
+        else {
+          const MembraneShape piece = next <= kOtherSaddle       ? MembraneShape::Saddle
+                                      : next <= kOtherLevelPiece ? MembraneShape::LevelPiece
+                                                                 : MembraneShape::NearbyPinch;
+          m = allowed(membrane_voxels(grid, g, options.membrane, piece));
+        }
+        if (!m.found) {
+          last = m.note;
+          continue;
+        }
+        e.attempt = next;
+        e.side = g.side;
+        e.depth = g.depth;
+        e.point = g.point;
+        e.voxels = std::move(m.shore);
+        e.volume = double(e.voxels.size()) * voxel_volume;
+        return true;
+      }
+      why_not = std::string("neither the saddles, their level pieces, the pinches near them") +
+                (wide_boxes ? ", a disc nor a thinning to a pinch" : " nor a disc") + " removed the pair, and " + last;
+      return false;
+    };
     std::vector<PendingEdit> edits;
     for (const Candidate& c : candidates) {
       const MembraneVoxels* pick = nullptr;
@@ -481,6 +539,19 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
       if (cut_ok && (!fill_ok || (cut_failed != fill_failed ? fill_failed : cut_smaller))) pick = &c.cut_voxels;
       else if (fill_ok) pick = &c.fill_voxels, side = Side::Tunnel;
       if (!pick) {
+        // No membrane closed: thinned to a pinch instead (once the rounds with discs alone are over), on the
+        // side the criteria allow first.
+        PendingEdit e;
+        e.first = c.cut ? &c.pair->handle : &c.pair->tunnel;
+        if (c.cut && c.fill) e.other = &c.pair->tunnel;
+        e.attempt = kDisc;
+        e.round = round;
+        e.persistence = c.pair->persistence;
+        std::string why_not;
+        if (wide_boxes && remake(e, why_not, false)) {
+          edits.push_back(std::move(e));
+          continue;
+        }
         const std::string why = c.cut ? c.cut_voxels.note : c.fill_voxels.note;
         unresolved.push_back("the pair at " + where(c.pair->handle) + " (handle depth " + std::to_string(c.pair->handle.depth) +
                              ", tunnel depth " + std::to_string(c.pair->tunnel.depth) + "): " + why);
@@ -502,35 +573,8 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     }
     const auto t_e = Clock::now();
     undone.clear();
-    // The next of a noise pair's attempts that closes (see Attempt); the other side only when it is as thin.
-    auto remake = [&](PendingEdit& e, std::string& why_not) {
-      const bool other_ok = e.other && e.other->depth < 0.5 * grid.voxel_size && !failed_before(*e.other);
-      std::string last;
-      for (int next = e.attempt + 1; next <= kDisc; ++next) {
-        const bool on_other = next == kOtherSaddle || next == kOtherLevelPiece || next == kOtherPinch;
-        if (on_other && !other_ok) continue;
-        const Choke& g = on_other ? *e.other : *e.first;
-        const MembraneShape piece = next <= kOtherSaddle       ? MembraneShape::Saddle
-                                    : next <= kOtherLevelPiece ? MembraneShape::LevelPiece
-                                                               : MembraneShape::NearbyPinch;
-        MembraneVoxels m = next == kDisc ? membrane_of(g, false, shape) : allowed(membrane_voxels(grid, g, options.membrane, piece));
-        if (!m.found) {
-          last = m.note;
-          continue;
-        }
-        e.attempt = next;
-        e.side = g.side;
-        e.depth = g.depth;
-        e.point = g.point;
-        e.voxels = std::move(m.shore);
-        e.volume = double(e.voxels.size()) * voxel_volume;
-        return true;
-      }
-      why_not = "neither the saddles, their level pieces nor the pinches near them removed the pair, and " + last;
-      return false;
-    };
     std::vector<FilterEdit> kept =
-        apply_checked(grid, std::move(edits), now, labels, remake, options.keep_genus, undone, failed, t_labels, t_persistence);
+        apply_checked(grid, std::move(edits), now, labels, remake, last_attempt, options.keep_genus, undone, failed, t_labels, t_persistence);
     t_edits += ms_since(t_e);
     // A round without progress is retried once with the other flood order before giving up.
     idle_rounds = kept.empty() ? idle_rounds + 1 : 0;

@@ -2,6 +2,7 @@
 // The grid vertices of a choke's membrane: one shore of the two-lobe flood's contact sheet (membranes.h),
 // the disc across a handle (in the solid) or across a tunnel (in the outside). Flipping their sign cuts the
 // handle or fills the tunnel; `chokeloops filter` does that, and label volumes draw the membrane with them.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,5 +43,15 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const
 // says why none did.
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
                                        MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true);
+
+// Where no membrane removes the pair alone (it joins components, opens a cavity, or does not close): the
+// generator's side near the saddle thinned by simple points (a flip that changes neither side's topology),
+// nearest the surface first and no deeper than the choke (|f| <= depth + half a voxel, within depth + 1 voxel
+// of the saddle), until a vertex of that side pinches (its link there is two pieces that meet elsewhere);
+// then the flips the pinch does not need are taken back. Flipping the result lowers that side's genus by one
+// and changes nothing else (a pinch whose pieces are not seen to meet within 8 times that reach is taken
+// only when none is, and left to the caller's check). `can_change` (may be empty) limits the flips.
+MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& choke,
+                                    const std::function<bool(Id)>& can_change = {});
 
 }  // namespace chokeloops

@@ -1,0 +1,243 @@
+// thinned_pinch_voxels: a pair removed by simple-point flips plus one pinch (membrane_voxels.h).
+//
+// Why. A disc across a handle (or a tunnel) is the smallest edit, but on rough fields the disc can join two
+// components, open a cavity or not close at all, because what lies around the choke is tangled with other
+// pieces. A simple point's flip changes neither side's topology (its link on each side is a disc), so a
+// set of simple flips followed by one flip whose link on its side is two discs (and an annulus on the
+// other) changes the topology in exactly one way: that side loses a handle, or splits in two if its two
+// pieces do not meet elsewhere. The thinning therefore cannot join components or open cavities.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <queue>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "chokeloops/loops/membrane_voxels.h"
+
+namespace chokeloops {
+
+namespace {
+
+// The pieces of the link vertices `on` (a 14-bit mask) joined by link edges: count, and the piece of each.
+int link_pieces(std::uint16_t on, std::array<int, 14>& piece) {
+  const auto& link = freudenthal::vertex_link();
+  piece.fill(-1);
+  int count = 0;
+  for (int s = 0; s < 14; ++s) {
+    if (!(on >> s & 1) || piece[s] >= 0) continue;
+    int stack[14], top = 0;
+    stack[top++] = s;
+    piece[s] = count;
+    while (top) {
+      const int a = stack[--top];
+      const std::uint16_t next = link.adjacency[std::size_t(a)] & on;
+      for (int b = 0; b < 14; ++b)
+        if ((next >> b & 1) && piece[b] < 0) piece[b] = count, stack[top++] = b;
+    }
+    ++count;
+  }
+  return count;
+}
+
+// The flips of one thinning, in a box around the saddle that holds every vertex that may flip.
+// How many vertices a search for where a pinch's two pieces meet may visit (a handle of the whole brain's size
+// is a few million vertices around).
+constexpr std::size_t kMeetBudget = std::size_t(1) << 23;
+
+struct Thinning {
+  const ScalarGrid& grid;
+  const FreudenthalComplex cx;
+  std::array<int, 3> lo{}, n{};
+  std::vector<std::uint8_t> flip;  // per box vertex: 1 flipped
+
+  Thinning(const ScalarGrid& g, const std::array<int, 3>& centre, int reach) : grid(g), cx(g.dims) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, centre[a] - reach);
+      n[a] = std::min(g.dims[a] - 1, centre[a] + reach) - lo[a] + 1;
+    }
+    flip.assign(std::size_t(n[0]) * n[1] * n[2], 0);
+  }
+  // The box index of v, or -1 outside the box.
+  std::int64_t local(Id v) const {
+    const auto p = cx.coords(v);
+    for (int a = 0; a < 3; ++a)
+      if (p[a] < lo[a] || p[a] >= lo[a] + n[a]) return -1;
+    return std::int64_t(p[0] - lo[0]) + std::int64_t(n[0]) * (std::int64_t(p[1] - lo[1]) + std::int64_t(n[1]) * (p[2] - lo[2]));
+  }
+  bool flipped(Id v) const {
+    const std::int64_t l = local(v);
+    return l >= 0 && flip[std::size_t(l)];
+  }
+  void set(Id v, bool on) { flip[std::size_t(local(v))] = on; }
+  bool inside_now(Id v) const { return (grid.values[std::size_t(v)] <= 0) != flipped(v); }
+  // The link neighbours on v's side now (v is at least a voxel from the grid's sides).
+  std::uint16_t same_side_link(Id v) const {
+    const bool side = inside_now(v);
+    std::uint16_t on = 0;
+    for (int k = 0; k < 14; ++k)
+      if (inside_now(v + cx.neighbor_delta(k)) == side) on |= std::uint16_t(1u << k);
+    return on;
+  }
+  static bool simple(std::uint16_t on, std::array<int, 14>& piece) {
+    if (on == 0 || on == 0x3fff) return false;
+    return link_pieces(on, piece) == 1 && link_pieces(std::uint16_t(~on & 0x3fff), piece) == 1;
+  }
+  // Whether the two pieces of v's link on its side meet without v anywhere in the grid: a search from each
+  // piece in turn, so that a small piece (a speck that would break off) is settled in its own time. Gives up
+  // (false) after `budget` vertices.
+  bool pieces_meet(Id v, std::uint16_t on, const std::array<int, 14>& piece, std::size_t budget) const {
+    const bool side = inside_now(v);
+    std::unordered_map<Id, std::uint8_t> mark;  // 1, 2: reached from that piece; 3: v
+    mark.reserve(1024);
+    mark[v] = 3;
+    std::array<std::vector<Id>, 2> queue;
+    std::array<std::size_t, 2> head{0, 0};
+    for (int k = 0; k < 14; ++k) {
+      if (!(on >> k & 1) || piece[k] > 1) continue;
+      const Id u = v + cx.neighbor_delta(k);
+      const std::uint8_t from = std::uint8_t(piece[k] + 1);
+      const auto [it, fresh] = mark.emplace(u, from);
+      if (!fresh && it->second != from) return true;
+      if (fresh) queue[std::size_t(piece[k])].push_back(u);
+    }
+    for (int turn = 0; mark.size() < budget; turn ^= 1) {
+      const std::size_t s = std::size_t(turn);
+      if (head[s] == queue[s].size()) return false;  // this piece's part of the side ends here: they do not meet
+      const Id w = queue[s][head[s]++];
+      const auto p = cx.coords(w);
+      for (int k = 0; k < 14; ++k) {
+        if (!cx.neighbor_inside(p, k)) continue;
+        const Id u = w + cx.neighbor_delta(k);
+        if (inside_now(u) != side) continue;
+        const auto [it, fresh] = mark.emplace(u, std::uint8_t(turn + 1));
+        if (fresh) queue[s].push_back(u);
+        else if (it->second != 3 && it->second != turn + 1) return true;
+      }
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& c, const std::function<bool(Id)>& can_change) {
+  MembraneVoxels out;
+  const FreudenthalComplex cx(grid.dims);
+  const bool inside = c.side == Side::Handle;
+  const double h = grid.voxel_size;
+  const float limit = float(c.depth + 0.5 * h);
+  const auto sc = cx.coords(c.saddle);
+  // A handle that is a ribbon wider than the ball thins to a sheet held by the ball's side, with no pinch: the
+  // ball grows until it takes in the ribbon's edges, from which the sheet then thins to a wire.
+  const int first_reach = int(std::ceil(c.depth / h)) + 1;
+  const int max_reach = std::max(16, 4 * first_reach);
+  if ((grid.values[std::size_t(c.saddle)] <= 0) != inside) {
+    out.note = "its saddle is no longer on its side";
+    return out;
+  }
+  Thinning t(grid, sc, max_reach + 1);
+  Id pinch = -1;
+  std::vector<Id> order;  // the flips, in the order made
+  std::array<int, 14> piece;
+  for (int reach = first_reach;; reach = std::min(max_reach, 2 * reach)) {
+    std::fill(t.flip.begin(), t.flip.end(), 0);
+    order.clear();
+    auto in_ball = [&](Id v) {
+      const auto p = cx.coords(v);
+      for (int a = 0; a < 3; ++a)
+        if (std::abs(p[a] - sc[a]) > reach || p[a] < 1 || p[a] > grid.dims[a] - 2) return false;
+      return true;
+    };
+    // Only the piece of the side around the saddle within the ball: a flip in another piece (a cavity next to a
+    // tunnel, another component next to a handle) would change nothing, and would tie that piece to the edit.
+    std::vector<std::uint8_t> piece_of_saddle(t.flip.size(), 0);
+    {
+      std::vector<Id> stack{c.saddle};
+      piece_of_saddle[std::size_t(t.local(c.saddle))] = 1;
+      while (!stack.empty()) {
+        const Id v = stack.back();
+        stack.pop_back();
+        const auto p = cx.coords(v);
+        for (int k = 0; k < 14; ++k) {
+          if (!cx.neighbor_inside(p, k)) continue;
+          const Id u = v + cx.neighbor_delta(k);
+          if (!in_ball(u) || (grid.values[std::size_t(u)] <= 0) != inside) continue;
+          std::uint8_t& m = piece_of_saddle[std::size_t(t.local(u))];
+          if (!m) m = 1, stack.push_back(u);
+        }
+      }
+    }
+    auto candidate = [&](Id v) {
+      if (!in_ball(v) || !piece_of_saddle[std::size_t(t.local(v))]) return false;
+      const float f = grid.values[std::size_t(v)];
+      return std::abs(f) <= limit && (!can_change || can_change(v));
+    };
+    using Entry = std::pair<float, Id>;  // |f|, then the id: the same order on every run
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+    auto push_candidates_around = [&](Id v) {
+      const auto p = cx.coords(v);
+      for (int k = 0; k < 14; ++k) {
+        if (!cx.neighbor_inside(p, k)) continue;
+        const Id u = v + cx.neighbor_delta(k);
+        if (!t.flipped(u) && candidate(u)) queue.push({std::abs(grid.values[std::size_t(u)]), u});
+      }
+    };
+    // Start from the generator's side where it meets the other side, nearest the surface first.
+    for (int dz = -reach; dz <= reach; ++dz)
+      for (int dy = -reach; dy <= reach; ++dy)
+        for (int dx = -reach; dx <= reach; ++dx) {
+          if (!cx.inside(sc[0] + dx, sc[1] + dy, sc[2] + dz)) continue;
+          const Id v = cx.vertex(sc[0] + dx, sc[1] + dy, sc[2] + dz);
+          if (candidate(v) && t.same_side_link(v) != 0x3fff) queue.push({std::abs(grid.values[std::size_t(v)]), v});
+        }
+    while (!queue.empty() && pinch < 0) {
+      const Id v = queue.top().second;
+      queue.pop();
+      if (t.flipped(v)) continue;
+      const std::uint16_t on = t.same_side_link(v);
+      if (Thinning::simple(on, piece)) {
+        t.set(v, true);
+        order.push_back(v);
+        push_candidates_around(v);
+        continue;
+      }
+      if (on == 0x3fff || link_pieces(on, piece) != 2 || link_pieces(std::uint16_t(~on & 0x3fff), piece) != 1) continue;
+      link_pieces(on, piece);
+      if (t.pieces_meet(v, on, piece, kMeetBudget)) pinch = v;  // else it would split the side
+    }
+    if (pinch >= 0 || reach == max_reach) break;
+  }
+  if (pinch < 0) {
+    out.note = "thinning the " + std::string(inside ? "solid" : "outside") + " near the saddle met no pinch";
+    return out;
+  }
+  // Only what the pinch needs: every flip that can be taken back without changing the topology of the field
+  // with the pinch flipped is taken back, deepest first; a flip not taken back is looked at again when a
+  // neighbour's is.
+  t.set(pinch, true);
+  using Entry = std::pair<float, Id>;
+  std::priority_queue<Entry> regrow;  // deepest first, then the larger id
+  for (Id v : order) regrow.push({std::abs(grid.values[std::size_t(v)]), v});
+  while (!regrow.empty()) {
+    const Id v = regrow.top().second;
+    regrow.pop();
+    if (v == pinch || !t.flipped(v) || !Thinning::simple(t.same_side_link(v), piece)) continue;
+    t.set(v, false);
+    const auto p = cx.coords(v);
+    for (int k = 0; k < 14; ++k) {
+      const Id u = v + cx.neighbor_delta(k);
+      if (cx.neighbor_inside(p, k) && u != pinch && t.flipped(u)) regrow.push({std::abs(grid.values[std::size_t(u)]), u});
+    }
+  }
+  for (Id v : order)
+    if (t.flipped(v)) out.shore.push_back(v);
+  out.shore.push_back(pinch);
+  std::sort(out.shore.begin(), out.shore.end());
+  out.shore.erase(std::unique(out.shore.begin(), out.shore.end()), out.shore.end());
+  out.found = true;
+  return out;
+}
+
+}  // namespace chokeloops
