@@ -130,9 +130,11 @@ MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& c, cons
   const float limit = float(c.depth + 0.5 * h);
   const auto sc = cx.coords(c.saddle);
   // A handle that is a ribbon wider than the ball thins to a sheet held by the ball's side, with no pinch: the
-  // ball grows until it takes in the ribbon's edges, from which the sheet then thins to a wire.
+  // ball grows until it takes in the ribbon's edges, from which the sheet then thins to a wire. A tunnel whose
+  // narrowest place lies between two components has pinches only further along its channel (the grey-matter
+  // map's last pairs needed a box of 64).
   const int first_reach = int(std::ceil(c.depth / h)) + 1;
-  const int max_reach = std::max(16, 4 * first_reach);
+  const int max_reach = std::max(64, 4 * first_reach);
   if ((grid.values[std::size_t(c.saddle)] <= 0) != inside) {
     out.note = "its saddle is no longer on its side";
     return out;

@@ -46,11 +46,10 @@ MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& chok
 
 // Where no membrane removes the pair alone (it joins components, opens a cavity, or does not close): the
 // generator's side near the saddle thinned by simple points (a flip that changes neither side's topology),
-// nearest the surface first and no deeper than the choke (|f| <= depth + half a voxel, within depth + 1 voxel
-// of the saddle), until a vertex of that side pinches (its link there is two pieces that meet elsewhere);
-// then the flips the pinch does not need are taken back. Flipping the result lowers that side's genus by one
-// and changes nothing else (a pinch whose pieces are not seen to meet within 8 times that reach is taken
-// only when none is, and left to the caller's check). `can_change` (may be empty) limits the flips.
+// nearest the surface first and no deeper than the choke (|f| <= depth + half a voxel), in a box of depth + 1
+// voxels around the saddle grown x2 up to 64 voxels, until a vertex of that side pinches (its link there is two
+// pieces that meet elsewhere in the grid); then the flips the pinch does not need are taken back. Flipping the
+// result lowers that side's genus by one and changes nothing else. `can_change` (may be empty) limits the flips.
 MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& choke,
                                     const std::function<bool(Id)>& can_change = {});
 
