@@ -10,7 +10,6 @@
 #include <array>
 #include <cmath>
 #include <queue>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -86,38 +85,47 @@ struct Thinning {
   }
   // Whether the two pieces of v's link on its side meet without v anywhere in the grid: a search from each
   // piece in turn, so that a small piece (a speck that would break off) is settled in its own time. Gives up
-  // (false) after `budget` vertices.
-  bool pieces_meet(Id v, std::uint16_t on, const std::array<int, 14>& piece, std::size_t budget) const {
+  // (false) after `budget` vertices. The marks are a byte per grid vertex, made at the first search and
+  // cleared after each from its queues (a hash set of millions of vertices took 40 bytes each).
+  bool pieces_meet(Id v, std::uint16_t on, const std::array<int, 14>& piece, std::size_t budget) {
     const bool side = inside_now(v);
-    std::unordered_map<Id, std::uint8_t> mark;  // 1, 2: reached from that piece; 3: v
-    mark.reserve(1024);
-    mark[v] = 3;
+    if (meet_mark.empty()) meet_mark.assign(std::size_t(cx.vertex_count()), 0);
     std::array<std::vector<Id>, 2> queue;
     std::array<std::size_t, 2> head{0, 0};
-    for (int k = 0; k < 14; ++k) {
-      if (!(on >> k & 1) || piece[k] > 1) continue;
-      const Id u = v + cx.neighbor_delta(k);
-      const std::uint8_t from = std::uint8_t(piece[k] + 1);
-      const auto [it, fresh] = mark.emplace(u, from);
-      if (!fresh && it->second != from) return true;
-      if (fresh) queue[std::size_t(piece[k])].push_back(u);
-    }
-    for (int turn = 0; mark.size() < budget; turn ^= 1) {
-      const std::size_t s = std::size_t(turn);
-      if (head[s] == queue[s].size()) return false;  // this piece's part of the side ends here: they do not meet
-      const Id w = queue[s][head[s]++];
-      const auto p = cx.coords(w);
+    const bool met = [&] {
+      meet_mark[std::size_t(v)] = 3;  // 1, 2: reached from that piece; 3: v
       for (int k = 0; k < 14; ++k) {
-        if (!cx.neighbor_inside(p, k)) continue;
-        const Id u = w + cx.neighbor_delta(k);
-        if (inside_now(u) != side) continue;
-        const auto [it, fresh] = mark.emplace(u, std::uint8_t(turn + 1));
-        if (fresh) queue[s].push_back(u);
-        else if (it->second != 3 && it->second != turn + 1) return true;
+        if (!(on >> k & 1) || piece[k] > 1) continue;
+        const Id u = v + cx.neighbor_delta(k);
+        std::uint8_t& m = meet_mark[std::size_t(u)];
+        const std::uint8_t from = std::uint8_t(piece[k] + 1);
+        if (m && m != from) return true;
+        if (!m) m = from, queue[std::size_t(piece[k])].push_back(u);
       }
-    }
-    return false;
+      for (int turn = 0; queue[0].size() + queue[1].size() < budget; turn ^= 1) {
+        const std::size_t s = std::size_t(turn);
+        if (head[s] == queue[s].size()) return false;  // this piece's part of the side ends here: they do not meet
+        const Id w = queue[s][head[s]++];
+        const auto p = cx.coords(w);
+        for (int k = 0; k < 14; ++k) {
+          if (!cx.neighbor_inside(p, k)) continue;
+          const Id u = w + cx.neighbor_delta(k);
+          std::uint8_t& m = meet_mark[std::size_t(u)];
+          if (m == 3 || m == turn + 1) continue;
+          if (m) return true;
+          if (inside_now(u) != side) continue;
+          m = std::uint8_t(turn + 1);
+          queue[s].push_back(u);
+        }
+      }
+      return false;
+    }();
+    meet_mark[std::size_t(v)] = 0;
+    for (const auto& q : queue)
+      for (Id u : q) meet_mark[std::size_t(u)] = 0;
+    return met;
   }
+  std::vector<std::uint8_t> meet_mark;
 };
 
 }  // namespace
