@@ -237,9 +237,10 @@ class ChokeTracer {
     std::vector<std::int32_t> shore;  // labelled input vertices
     const auto& pos = cx_.field.vertices;
     while (!queue.empty()) {
-      const auto [key, seq, x] = queue.top();
+      // Named copies, not structured bindings: a lambda may capture those only from C++20 (clang refuses).
+      const double key = std::get<0>(queue.top());
+      const std::int32_t x = std::get<2>(queue.top());
       queue.pop();
-      (void)seq;
       const std::uint8_t z = s_.zone[std::size_t(x)];
       if (x < cx_.field.input_vertices) shore.push_back(x);
       adjacency_.each(x, [&](std::int32_t u) {
