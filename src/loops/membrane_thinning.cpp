@@ -14,33 +14,16 @@
 #include <vector>
 
 #include "chokeloops/loops/membrane_voxels.h"
+#include "topology/link_table.h"
 
 namespace chokeloops {
 
 namespace {
 
-// The pieces of the link vertices `on` (a 14-bit mask) joined by link edges: count, and the piece of each.
-int link_pieces(std::uint16_t on, std::array<int, 14>& piece) {
-  const auto& link = freudenthal::vertex_link();
-  piece.fill(-1);
-  int count = 0;
-  for (int s = 0; s < 14; ++s) {
-    if (!(on >> s & 1) || piece[s] >= 0) continue;
-    int stack[14], top = 0;
-    stack[top++] = s;
-    piece[s] = count;
-    while (top) {
-      const int a = stack[--top];
-      const std::uint16_t next = link.adjacency[std::size_t(a)] & on;
-      for (int b = 0; b < 14; ++b)
-        if ((next >> b & 1) && piece[b] < 0) piece[b] = count, stack[top++] = b;
-    }
-    ++count;
-  }
-  return count;
-}
+// The components of a vertex's link on each side, from the table the persistence engine classifies by.
+const detail::LinkComponents& pieces(std::uint16_t on) { return detail::link_component_table()[on]; }
+constexpr std::uint16_t kWholeLink = 0x3fff;
 
-// The flips of one thinning, in a box around the saddle that holds every vertex that may flip.
 // How many vertices a search for where a pinch's two pieces meet may visit (a handle of the whole brain's size
 // is a few million vertices around).
 constexpr std::size_t kMeetBudget = std::size_t(1) << 23;
@@ -79,15 +62,16 @@ struct Thinning {
       if (inside_now(v + cx.neighbor_delta(k)) == side) on |= std::uint16_t(1u << k);
     return on;
   }
-  static bool simple(std::uint16_t on, std::array<int, 14>& piece) {
-    if (on == 0 || on == 0x3fff) return false;
-    return link_pieces(on, piece) == 1 && link_pieces(std::uint16_t(~on & 0x3fff), piece) == 1;
-  }
+  // Its flip changes neither side's topology: its link on each side is one disc.
+  static bool simple(std::uint16_t on) { return pieces(on).count == 1 && pieces(std::uint16_t(~on & kWholeLink)).count == 1; }
+  // Its flip lowers its side's genus or splits the side: two discs on its side, an annulus on the other.
+  static bool pinch(std::uint16_t on) { return pieces(on).count == 2 && pieces(std::uint16_t(~on & kWholeLink)).count == 1; }
   // Whether the two pieces of v's link on its side meet without v anywhere in the grid: a search from each
   // piece in turn, so that a small piece (a speck that would break off) is settled in its own time. Gives up
   // (false) after `budget` vertices. The marks are a byte per grid vertex, made at the first search and
   // cleared after each from its queues (a hash set of millions of vertices took 40 bytes each).
-  bool pieces_meet(Id v, std::uint16_t on, const std::array<int, 14>& piece, std::size_t budget) {
+  bool pieces_meet(Id v, std::uint16_t on, std::size_t budget) {
+    const auto& piece = pieces(on).masks;
     const bool side = inside_now(v);
     if (meet_mark.empty()) meet_mark.assign(std::size_t(cx.vertex_count()), 0);
     std::array<std::vector<Id>, 2> queue;
@@ -95,12 +79,13 @@ struct Thinning {
     const bool met = [&] {
       meet_mark[std::size_t(v)] = 3;  // 1, 2: reached from that piece; 3: v
       for (int k = 0; k < 14; ++k) {
-        if (!(on >> k & 1) || piece[k] > 1) continue;
+        if (!(on >> k & 1)) continue;
+        const int which = piece[0] >> k & 1 ? 0 : 1;
         const Id u = v + cx.neighbor_delta(k);
         std::uint8_t& m = meet_mark[std::size_t(u)];
-        const std::uint8_t from = std::uint8_t(piece[k] + 1);
+        const std::uint8_t from = std::uint8_t(which + 1);
         if (m && m != from) return true;
-        if (!m) m = from, queue[std::size_t(piece[k])].push_back(u);
+        if (!m) m = from, queue[std::size_t(which)].push_back(u);
       }
       for (int turn = 0; queue[0].size() + queue[1].size() < budget; turn ^= 1) {
         const std::size_t s = std::size_t(turn);
@@ -150,7 +135,6 @@ MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& c, cons
   Thinning t(grid, sc, max_reach + 1);
   Id pinch = -1;
   std::vector<Id> order;  // the flips, in the order made
-  std::array<int, 14> piece;
   for (int reach = first_reach;; reach = std::min(max_reach, 2 * reach)) {
     std::fill(t.flip.begin(), t.flip.end(), 0);
     order.clear();
@@ -200,22 +184,20 @@ MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& c, cons
         for (int dx = -reach; dx <= reach; ++dx) {
           if (!cx.inside(sc[0] + dx, sc[1] + dy, sc[2] + dz)) continue;
           const Id v = cx.vertex(sc[0] + dx, sc[1] + dy, sc[2] + dz);
-          if (candidate(v) && t.same_side_link(v) != 0x3fff) queue.push({std::abs(grid.values[std::size_t(v)]), v});
+          if (candidate(v) && t.same_side_link(v) != kWholeLink) queue.push({std::abs(grid.values[std::size_t(v)]), v});
         }
     while (!queue.empty() && pinch < 0) {
       const Id v = queue.top().second;
       queue.pop();
       if (t.flipped(v)) continue;
       const std::uint16_t on = t.same_side_link(v);
-      if (Thinning::simple(on, piece)) {
+      if (Thinning::simple(on)) {
         t.set(v, true);
         order.push_back(v);
         push_candidates_around(v);
         continue;
       }
-      if (on == 0x3fff || link_pieces(on, piece) != 2 || link_pieces(std::uint16_t(~on & 0x3fff), piece) != 1) continue;
-      link_pieces(on, piece);
-      if (t.pieces_meet(v, on, piece, kMeetBudget)) pinch = v;  // else it would split the side
+      if (Thinning::pinch(on) && t.pieces_meet(v, on, kMeetBudget)) pinch = v;  // else it would split the side
     }
     if (pinch >= 0 || reach == max_reach) break;
   }
@@ -233,7 +215,7 @@ MembraneVoxels thinned_pinch_voxels(const ScalarGrid& grid, const Choke& c, cons
   while (!regrow.empty()) {
     const Id v = regrow.top().second;
     regrow.pop();
-    if (v == pinch || !t.flipped(v) || !Thinning::simple(t.same_side_link(v), piece)) continue;
+    if (v == pinch || !t.flipped(v) || !Thinning::simple(t.same_side_link(v))) continue;
     t.set(v, false);
     const auto p = cx.coords(v);
     for (int k = 0; k < 14; ++k) {
