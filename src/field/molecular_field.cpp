@@ -169,30 +169,36 @@ void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
   }
   if (!any) return;
   const double h = g.voxel_size;
-  std::vector<detail::Site> sites;
-  std::vector<int> site_atom;
-  std::vector<std::uint8_t> taken(N);
+  // One site per vertex, the first atom there (two centres this close are one, seen from far away): the
+  // atoms sorted by their vertex rather than a grid-sized mark array.
+  std::vector<std::pair<std::int64_t, int>> at_vertex;
+  std::vector<std::array<float, 3>> at_point(c.size());
+  at_vertex.reserve(c.size());
   for (std::size_t i = 0; i < c.size(); ++i) {
     int ijk[3];
-    float p[3];
     for (int a = 0; a < 3; ++a) {
-      p[a] = float((c[i][a] - g.origin[a]) / h);
-      ijk[a] = std::clamp(int(std::lround(p[a])), 0, g.dims[a] - 1);
+      at_point[i][a] = float((c[i][a] - g.origin[a]) / h);
+      ijk[a] = std::clamp(int(std::lround(at_point[i][a])), 0, g.dims[a] - 1);
     }
-    const std::int64_t v = g.index(ijk[0], ijk[1], ijk[2]);
-    if (taken[std::size_t(v)]) continue;  // one site per vertex; two centres this close are one far away
-    taken[std::size_t(v)] = 1;
-    sites.push_back({v, {p[0], p[1], p[2]}});
+    at_vertex.push_back({g.index(ijk[0], ijk[1], ijk[2]), int(i)});
+  }
+  std::sort(at_vertex.begin(), at_vertex.end());
+  std::vector<std::uint8_t> first_at_vertex(c.size(), 0);
+  for (std::size_t n = 0; n < at_vertex.size(); ++n)
+    first_at_vertex[std::size_t(at_vertex[n].second)] = n == 0 || at_vertex[n].first != at_vertex[n - 1].first;
+  std::vector<detail::Site> sites;  // in atom order
+  std::vector<int> site_atom;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (!first_at_vertex[i]) continue;
+    int ijk[3];
+    for (int a = 0; a < 3; ++a) ijk[a] = std::clamp(int(std::lround(at_point[i][a])), 0, g.dims[a] - 1);
+    sites.push_back({g.index(ijk[0], ijk[1], ijk[2]), {at_point[i][0], at_point[i][1], at_point[i][2]}});
     site_atom.push_back(int(i));
   }
+  // The transform writes its distance into the unknown vertices of g (+inf, so positive), which are
+  // overwritten below with the distance to the nearest centre's sphere: no second grid is needed.
   std::vector<std::int32_t> nearest;
-  ScalarGrid tmp;
-  tmp.dims = g.dims;
-  tmp.origin = g.origin;
-  tmp.voxel_size = h;
-  tmp.values.assign(N, 1.f);
-  detail::complete_by_feature_transform(tmp, known, sites, &nearest);
-  tmp.values = {};
+  detail::complete_by_feature_transform(g, known, sites, &nearest);
   tbb::parallel_for(tbb::blocked_range<int>(0, g.dims[2]), [&](const tbb::blocked_range<int>& r) {
     for (int k = r.begin(); k != r.end(); ++k)
       for (int j = 0; j < g.dims[1]; ++j)
