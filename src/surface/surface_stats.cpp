@@ -6,7 +6,6 @@
 #include "chokeloops/surface/surface.h"
 
 #include "halfedge_groups.h"
-#include "union_find.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -15,22 +14,67 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 
 namespace chokeloops {
 
-int face_components(const SurfaceMesh& mesh, std::vector<int>& face_label) {
-  UnionFind uf(mesh.vertices.size());
-  for (auto& t : mesh.faces) {
-    uf.unite(t[0], t[1]);
-    uf.unite(t[0], t[2]);
+namespace {
+
+// Disjoint sets joined from many threads at once: a root is linked only by a compare-and-swap of its own
+// parent, always under the smaller root, so each set's root is its smallest vertex whatever the order of
+// the unions (the serial UnionFind's result). Path halving may race, but only ever points a vertex at one
+// of its ancestors.
+struct ConcurrentUnionFind {
+  std::vector<int> p;
+  explicit ConcurrentUnionFind(std::size_t n) : p(n) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) p[i] = int(i);
+    });
   }
+  int parent(int x) const { return __atomic_load_n(&p[std::size_t(x)], __ATOMIC_RELAXED); }
+  int find(int x) {
+    for (int up = parent(x); up != x; up = parent(x)) {
+      const int grand = parent(up);
+      __atomic_compare_exchange_n(&p[std::size_t(x)], &up, grand, false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+      x = grand;
+    }
+    return x;
+  }
+  void unite(int a, int b) {
+    for (;;) {
+      a = find(a), b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      int expected = a;  // a is still a root: hang it under b
+      if (__atomic_compare_exchange_n(&p[std::size_t(a)], &expected, b, false, __ATOMIC_ACQ_REL, __ATOMIC_RELAXED))
+        return;
+    }
+  }
+};
+
+}  // namespace
+
+int face_components(const SurfaceMesh& mesh, std::vector<int>& face_label) {
+  ConcurrentUnionFind uf(mesh.vertices.size());
+  const std::size_t nf = mesh.faces.size();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t fi = r.begin(); fi < r.end(); ++fi) {
+      const auto& t = mesh.faces[fi];
+      uf.unite(t[0], t[1]);
+      uf.unite(t[0], t[2]);
+    }
+  });
+  // Each face's root in parallel; the labels then follow the faces' order, as before.
+  face_label.resize(nf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t fi = r.begin(); fi < r.end(); ++fi) face_label[fi] = uf.find(mesh.faces[fi][0]);
+  });
   std::vector<int> label(mesh.vertices.size(), -1);
-  face_label.assign(mesh.faces.size(), -1);
   int n = 0;
-  for (size_t fi = 0; fi < mesh.faces.size(); ++fi) {
-    int r = uf.find(mesh.faces[fi][0]);
-    if (label[r] < 0) label[r] = n++;
-    face_label[fi] = label[r];
+  for (std::size_t fi = 0; fi < nf; ++fi) {
+    int& l = label[std::size_t(face_label[fi])];
+    if (l < 0) l = n++;
+    face_label[fi] = l;
   }
   return n;
 }
@@ -150,12 +194,25 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& A) {
   }
   s.closed_manifold = s.boundary_edges == 0 && s.nonmanifold_edges == 0 && s.nonmanifold_vertices == 0 &&
                       s.inconsistent_edges == 0;
+  // Fixed chunks summed in order: the same sums for any thread count.
+  constexpr std::size_t kChunk = 1 << 16;
+  const std::size_t nf = mesh.faces.size(), chunks = (nf + kChunk - 1) / kChunk;
+  std::vector<std::array<double, 2>> part(chunks, {0.0, 0.0});
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t ch = r.begin(); ch < r.end(); ++ch) {
+      double vol = 0, area = 0;
+      for (std::size_t fi = ch * kChunk; fi < std::min(nf, (ch + 1) * kChunk); ++fi) {
+        const auto& t = mesh.faces[fi];
+        const Eigen::Vector3d a(mesh.vertices[t[0]].data()), b(mesh.vertices[t[1]].data()),
+            c(mesh.vertices[t[2]].data());
+        vol += a.dot(b.cross(c)) / 6.0;
+        area += 0.5 * (b - a).cross(c - a).norm();
+      }
+      part[ch] = {vol, area};
+    }
+  });
   double vol = 0, area = 0;
-  for (auto& t : mesh.faces) {
-    const Eigen::Vector3d a(mesh.vertices[t[0]].data()), b(mesh.vertices[t[1]].data()), c(mesh.vertices[t[2]].data());
-    vol += a.dot(b.cross(c)) / 6.0;
-    area += 0.5 * (b - a).cross(c - a).norm();
-  }
+  for (const auto& pa : part) vol += pa[0], area += pa[1];
   s.enclosed_volume = vol;
   s.area = area;
   return s;
