@@ -129,6 +129,71 @@ TEST(Surface, RandomFieldsSatisfyEulerIdentity) {
   }
 }
 
+// Every count of the march against the Freudenthal complex itself, on blocky random fields whose uniform
+// runs start and stop anywhere along rows of every length from 2 to 19 (the march skips eight uniform
+// cubes of a row at a time): one surface vertex per edge whose ends differ, one or two triangles per
+// tetrahedron with one, three or two corners inside, and Euler characteristic twice that of the solid (the
+// subcomplex spanned by the inside vertices; the border is outside, so the surface is closed).
+TEST(Surface, CountsMatchTheFreudenthalComplexOnEveryRowLength) {
+  std::uint64_t state = 12345;
+  auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(1ull << 53);
+  };
+  for (int nx = 2; nx <= 19; ++nx) {
+    const int ny = 7 + nx % 3, nz = 6 + nx % 4;
+    ScalarGrid g;
+    g.dims = {nx, ny, nz};
+    g.voxel_size = 1;
+    g.values.resize(std::size_t(nx) * ny * nz);
+    const int block = 2 + nx % 4;  // blocks of one sign, then a few single vertices flipped
+    std::vector<float> block_value(std::size_t(nx / block + 1) * (ny / block + 1) * (nz / block + 1));
+    for (auto& b : block_value) b = next() < 0.45 ? -1.f : 1.f;
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          const std::size_t b = std::size_t(i / block) + std::size_t(nx / block + 1) *
+                                (std::size_t(j / block) + std::size_t(ny / block + 1) * std::size_t(k / block));
+          float v = block_value[b] * float(0.25 + next());
+          if (next() < 0.04) v = -v;
+          if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1) v = 1;
+          g.values[g.index(i, j, k)] = v;
+        }
+    auto in = [&](int i, int j, int k) { return g.values[g.index(i, j, k)] <= 0; };
+    auto at = [&](int i, int j, int k, int m) { return in(i + (m & 1), j + (m >> 1 & 1), k + (m >> 2 & 1)); };
+    std::int64_t crossing_edges = 0, triangles = 0, chi = 0;
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          auto fits = [&](int m) { return i + (m & 1) < nx && j + (m >> 1 & 1) < ny && k + (m >> 2 & 1) < nz; };
+          const bool v = in(i, j, k);
+          chi += v;
+          for (int m = 1; m < 8; ++m) {
+            if (!fits(m)) continue;
+            crossing_edges += at(i, j, k, m) != v;
+            chi -= v && at(i, j, k, m);
+            for (int p = 1; p < m; ++p)  // triangles {v, v + p, v + m}, p a proper part of m
+              if ((p & m) == p) chi += v && at(i, j, k, p) && at(i, j, k, m);
+          }
+          if (!fits(7)) continue;
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) {
+              if (a == b) continue;
+              const int m1 = 1 << a, m2 = m1 | 1 << b;
+              const int inside = int(v) + at(i, j, k, m1) + at(i, j, k, m2) + at(i, j, k, 7);
+              chi -= inside == 4;
+              triangles += inside == 2 ? 2 : inside % 4 != 0 ? 1 : 0;
+            }
+        }
+    const SurfaceMesh m = extract_zero_surface(g);
+    const SurfaceStats st = surface_stats(m);
+    EXPECT_EQ(std::int64_t(m.vertices.size()), crossing_edges) << nx;
+    EXPECT_EQ(std::int64_t(m.faces.size()), triangles) << nx;
+    EXPECT_TRUE(st.closed_manifold) << nx;
+    EXPECT_EQ(st.euler, 2 * chi) << nx;
+  }
+}
+
 TEST(Surface, DeterministicAcrossThreadCounts) {
   auto g = cube_field(64, analytic::double_torus());
   SurfaceMesh a, b;
@@ -143,6 +208,39 @@ TEST(Surface, DeterministicAcrossThreadCounts) {
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.faces, b.faces);
   EXPECT_EQ(a.vertex_edge, b.vertex_edge);
+}
+
+TEST(Surface, ComponentsAndStatisticsAreTheSameForAnyThreadCount) {
+  // Several components (random bumps), joined by a concurrent union-find and summed in parallel chunks.
+  auto g = cube_field(72, analytic::random_gaussians(40, 7));
+  const SurfaceMesh m = extract_zero_surface(g);
+  std::vector<int> one_label, two_labels;
+  SurfaceStats one, two;
+  int one_count = 0, two_count = 0;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one_count = face_components(m, one_label);
+    one = surface_stats(m);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two_count = face_components(m, two_labels);
+    two = surface_stats(m);
+  }
+  EXPECT_GT(one_count, 1);
+  EXPECT_EQ(one_count, two_count);
+  EXPECT_EQ(one_label, two_labels);
+  // labels follow the faces' order: the first face of each component is where its label first appears
+  int seen = 0;
+  for (int l : one_label) {
+    ASSERT_LE(l, seen);
+    seen += l == seen;
+  }
+  EXPECT_EQ(one.components, two.components);
+  EXPECT_EQ(one.genus, two.genus);
+  EXPECT_EQ(one.component_genus, two.component_genus);
+  EXPECT_EQ(one.enclosed_volume, two.enclosed_volume);
+  EXPECT_EQ(one.area, two.area);
 }
 
 TEST(Surface, Extracts256CubedGyroidAsAClosedManifold) {
