@@ -171,28 +171,31 @@ void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
   const double h = g.voxel_size;
   // One site per vertex, the first atom there (two centres this close are one, seen from far away): the
   // atoms sorted by their vertex rather than a grid-sized mark array.
-  std::vector<std::pair<std::int64_t, int>> at_vertex;
-  std::vector<std::array<float, 3>> at_point(c.size());
-  at_vertex.reserve(c.size());
+  std::vector<std::int64_t> vertex_of(c.size());
+  std::vector<std::array<float, 3>> point_of(c.size());
   for (std::size_t i = 0; i < c.size(); ++i) {
     int ijk[3];
     for (int a = 0; a < 3; ++a) {
-      at_point[i][a] = float((c[i][a] - g.origin[a]) / h);
-      ijk[a] = std::clamp(int(std::lround(at_point[i][a])), 0, g.dims[a] - 1);
+      point_of[i][a] = float((c[i][a] - g.origin[a]) / h);
+      ijk[a] = std::clamp(int(std::lround(point_of[i][a])), 0, g.dims[a] - 1);
     }
-    at_vertex.push_back({g.index(ijk[0], ijk[1], ijk[2]), int(i)});
+    vertex_of[i] = g.index(ijk[0], ijk[1], ijk[2]);
   }
-  std::sort(at_vertex.begin(), at_vertex.end());
+  std::vector<int> by_vertex(c.size());
+  for (std::size_t i = 0; i < c.size(); ++i) by_vertex[i] = int(i);
+  std::sort(by_vertex.begin(), by_vertex.end(), [&](int a, int b) {
+    return vertex_of[std::size_t(a)] != vertex_of[std::size_t(b)] ? vertex_of[std::size_t(a)] < vertex_of[std::size_t(b)]
+                                                                   : a < b;
+  });
   std::vector<std::uint8_t> first_at_vertex(c.size(), 0);
-  for (std::size_t n = 0; n < at_vertex.size(); ++n)
-    first_at_vertex[std::size_t(at_vertex[n].second)] = n == 0 || at_vertex[n].first != at_vertex[n - 1].first;
+  for (std::size_t n = 0; n < by_vertex.size(); ++n)
+    first_at_vertex[std::size_t(by_vertex[n])] =
+        n == 0 || vertex_of[std::size_t(by_vertex[n])] != vertex_of[std::size_t(by_vertex[n - 1])];
   std::vector<detail::Site> sites;  // in atom order
   std::vector<int> site_atom;
   for (std::size_t i = 0; i < c.size(); ++i) {
     if (!first_at_vertex[i]) continue;
-    int ijk[3];
-    for (int a = 0; a < 3; ++a) ijk[a] = std::clamp(int(std::lround(at_point[i][a])), 0, g.dims[a] - 1);
-    sites.push_back({g.index(ijk[0], ijk[1], ijk[2]), {at_point[i][0], at_point[i][1], at_point[i][2]}});
+    sites.push_back({vertex_of[i], {point_of[i][0], point_of[i][1], point_of[i][2]}});
     site_atom.push_back(int(i));
   }
   // The transform writes its distance into the unknown vertices of g (+inf, so positive), which are
