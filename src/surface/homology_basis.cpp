@@ -12,9 +12,11 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
     : mesh_(mesh), adj_(adj), face_label_(face_label) {
   const int F = int(mesh.faces.size()), V = int(mesh.vertices.size());
   const int components = int(closed.size());
-  code_.assign(std::size_t(3) * F, kUnset);
+  // Fresh pages are much of this constructor's cost on a 17.7M-face surface: one byte a half-edge, and the
+  // DFS numbers double as the cotree's "reached" marks (-2 once a face is pushed).
+  part_.assign(std::size_t(3) * F, kUnset);
   first_.assign(F, -1);
-  last_.assign(F, -1);
+  last_.resize(F);
   auto in_basis = [&](int f) {
     const int c = face_label[f];
     return c >= 0 && closed[c];
@@ -28,19 +30,19 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
       const int t = adj.twin[h];
       if (t < h || !in_basis(MeshAdjacency::face(h))) continue;
       const auto& tri = mesh.faces[MeshAdjacency::face(h)];
-      if (vertices.unite(tri[h % 3], tri[(h + 1) % 3])) code_[h] = code_[t] = kTree;
+      if (vertices.unite(tri[h % 3], tri[(h + 1) % 3])) part_[h] = part_[t] = kTree;
     }
   }
   // Cotree over the faces, through the edges not in the tree, rooted at each component's first face and
   // numbered depth first as it grows: a face joins when it is first reached, so that the faces below it are
   // numbered right after it, and a marker (~f) pushed under its children closes its interval when they are
-  // done. A cotree edge gets the code of the face below it.
+  // done. A cotree edge records which of its faces is the one below it.
+  constexpr std::int32_t kReached = -2;
   std::vector<int> stack;
-  std::vector<char> reached(std::size_t(F), 0);
   std::int32_t counter = 0;
   for (int root = 0; root < F; ++root) {
-    if (reached[std::size_t(root)] || !in_basis(root)) continue;
-    reached[std::size_t(root)] = 1;
+    if (first_[root] != -1 || !in_basis(root)) continue;
+    first_[root] = kReached;
     stack.assign(1, root);
     while (!stack.empty()) {
       const int f = stack.back();
@@ -53,11 +55,12 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
       stack.push_back(~f);
       for (int k = 0; k < 3; ++k) {
         const int h = 3 * f + k;
-        if (code_[h] != kUnset) continue;
+        if (part_[h] != kUnset) continue;
         const int t = adj.twin[h], g = MeshAdjacency::face(t);
-        if (reached[std::size_t(g)]) continue;
-        reached[std::size_t(g)] = 1;
-        code_[h] = code_[t] = 2 * g + 1;
+        if (first_[g] != -1) continue;
+        first_[g] = kReached;
+        part_[h] = kCotreeBelowTwin;
+        part_[t] = kCotreeBelowHere;
         stack.push_back(g);
       }
     }
@@ -68,18 +71,24 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
   for (int h = 0; h < 3 * F; ++h) {
     const int t = adj.twin[h];
     const int c = face_label[MeshAdjacency::face(h)];
-    if (c < 0 || !closed[c] || code_[h] != kUnset || t < h) continue;
+    if (c < 0 || !closed[c] || part_[h] != kUnset || t < h) continue;
     per_component[c].push_back(h);
   }
   for (int c = 0; c < components; ++c) {
     leftover_start_[c + 1] = leftover_start_[c] + int(per_component[c].size());
     for (int h : per_component[c]) {
       const int t = adj.twin[h];
-      const int i = int(leftover_faces_.size());
-      code_[h] = code_[t] = 2 * i;
+      part_[h] = part_[t] = kLeftover;
+      leftover_edge_.push_back(h);
       leftover_faces_.push_back({first_[MeshAdjacency::face(h)], first_[MeshAdjacency::face(t)]});
     }
   }
+}
+
+int HomologyBasis::leftover_index(int lower_halfedge, int component) const {
+  const auto begin = leftover_edge_.begin() + leftover_start_[component],
+             end = leftover_edge_.begin() + leftover_start_[component + 1];
+  return int(std::lower_bound(begin, end, lower_halfedge) - leftover_edge_.begin());
 }
 
 bool HomologyBasis::null_homologous(const std::vector<int>& loop) const {
@@ -107,14 +116,14 @@ bool HomologyBasis::null_homologous(const std::vector<int>& loop) const {
     std::size_t j = i;
     while (j < edges.size() && edges[j] == edges[i]) ++j;
     const bool odd = (j - i) % 2 == 1;
-    const std::int32_t code = code_[edges[i]];
+    const int e = edges[i];
     i = j;
-    if (!odd || code == kTree) continue;
-    if (code % 2 == 0) {
-      bits[code / 2 - begin] ^= 1;
+    if (!odd || part_[e] == kTree) continue;
+    if (part_[e] == kLeftover) {
+      bits[leftover_index(e, c) - begin] ^= 1;
       continue;
     }
-    const int f = code / 2;  // the cotree edge above face f
+    const int f = MeshAdjacency::face(part_[e] == kCotreeBelowHere ? e : adj_.twin[e]);  // the face below
     ends.push_back(first_[f]);
     ends.push_back(last_[f] + 1);
   }

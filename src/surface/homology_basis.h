@@ -29,14 +29,17 @@ class HomologyBasis {
   bool null_homologous(const std::vector<int>& loop) const;
 
  private:
-  static constexpr std::int32_t kTree = -1, kUnset = -2;
+  // Per half-edge, one byte: which part of the decomposition its edge is in, and for a cotree edge which of
+  // its two faces hangs below it (a quarter of the int32 codes that stored the face itself).
+  enum Part : std::uint8_t { kUnset, kTree, kLeftover, kCotreeBelowHere, kCotreeBelowTwin };
+  int leftover_index(int lower_halfedge, int component) const;
   const SurfaceMesh& mesh_;
   const MeshAdjacency& adj_;
   const std::vector<int>& face_label_;
-  // Per half-edge: kTree, 2i for leftover edge i, 2f+1 for the cotree edge above face f.
-  std::vector<std::int32_t> code_;
+  std::vector<std::uint8_t> part_;
   std::vector<std::int32_t> first_, last_;    // per face: its subtree of C is [first_, last_] in DFS order
   std::vector<std::int32_t> leftover_start_;  // per component: its leftover edges' indices (components + 1)
+  std::vector<std::int32_t> leftover_edge_;   // per leftover edge: its lower half-edge, rising in each component
   std::vector<std::array<std::int32_t, 2>> leftover_faces_;  // per leftover edge: DFS numbers of its faces
 };
 
