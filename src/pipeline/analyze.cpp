@@ -82,12 +82,13 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   r.timings_ms["chokes"] = ms_since(t);
 
   stage("surface", 0);
-  MeshAdjacency adjacency = extract_checked_surface(r);
+  std::vector<int> face_label;
+  MeshAdjacency adjacency = extract_checked_surface(r, face_label);
 
   t = Clock::now();
   stage("loops", 0);
   LoopContext context;
-  prepare_loops(r, std::move(adjacency), context);
+  prepare_loops(r, std::move(adjacency), std::move(face_label), context);
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
                         r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
   r.timings_ms["loops"] = ms_since(t);
@@ -205,11 +206,11 @@ AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, c
   return r;
 }
 
-MeshAdjacency extract_checked_surface(AnalyzeResult& r) {
+MeshAdjacency extract_checked_surface(AnalyzeResult& r, std::vector<int>& face_label) {
   const auto t = Clock::now();
   r.surface = extract_zero_surface(r.grid);
   MeshAdjacency adjacency = build_adjacency(r.surface);
-  r.surface_stats = surface_stats(r.surface, adjacency);
+  r.surface_stats = surface_stats(r.surface, adjacency, &face_label);
   r.timings_ms["surface"] = ms_since(t);
   const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
   const bool injected = fault && std::string(fault) == "self-check";
@@ -221,12 +222,14 @@ MeshAdjacency extract_checked_surface(AnalyzeResult& r) {
   return adjacency;
 }
 
-void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, LoopContext& context) {
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context) {
   context.adjacency = std::move(adjacency);
   bool any_generator = false;
   for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
   // One topology of the surface serves the choice of every generator's curve and the check after.
-  if (any_generator) context.topology = std::make_unique<SurfaceTopology>(r.surface, context.adjacency);
+  if (any_generator)
+    context.topology = std::make_unique<SurfaceTopology>(r.surface, context.adjacency, std::move(face_label),
+                                                         int(r.surface_stats.components));
 }
 
 void drop_contractible_generators(std::vector<Loop>& loops, SurfaceTopology& topology, const std::vector<bool>* skip) {

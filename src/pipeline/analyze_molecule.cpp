@@ -49,7 +49,8 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
   r.timings_ms["chokes"] = ms(t);
   stage("surface", 0);
-  MeshAdjacency surface_adjacency = extract_checked_surface(r);
+  std::vector<int> face_label;
+  MeshAdjacency surface_adjacency = extract_checked_surface(r, face_label);
   // The loop stage's topology of the surface (its components, then its homology basis: serial passes over all
   // its faces, 2 s on maltoporin's 17.7M) is prepared beside the channels, which run in parallel and only read
   // the surface, rather than in the loop stage with every thread waiting on it. Timed with the channels.
@@ -58,7 +59,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   LoopContext context;
   tbb::task_group topology_task;
   topology_task.run([&] {
-    prepare_loops(r, std::move(surface_adjacency), context);
+    prepare_loops(r, std::move(surface_adjacency), std::move(face_label), context);
     if (context.topology) context.topology->prepare_homology();
   });
 

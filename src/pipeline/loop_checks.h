@@ -14,10 +14,11 @@
 namespace chokeloops {
 
 // The surface stage: r.surface and r.surface_stats from r.grid, timed as "surface"; returns the surface's
-// adjacency, which the statistics are read from and the loop stage reuses. A closed surface whose genus
+// adjacency, which the statistics are read from and the loop stage reuses, and the faces' components in
+// `face_label` (face_components numbering) for the loop stage's topology. A closed surface whose genus
 // differs from the handle generators is a bug (InternalError; CHOKELOOPS_TEST_FAULT=self-check forces it, so
 // that tests see how a bug is reported); an open one gets a warning.
-MeshAdjacency extract_checked_surface(AnalyzeResult& r);
+MeshAdjacency extract_checked_surface(AnalyzeResult& r, std::vector<int>& face_label);
 
 // What the loop stage shares between all chokes: the surface's adjacency, and its topology when some choke
 // is a generator (the choice of a generator's curve and the check below need it). The topology refers to the
@@ -29,7 +30,7 @@ struct LoopContext {
   MeshAdjacency adjacency;
   std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
 };
-void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, LoopContext& context);
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context);
 
 // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks that
 // it did; a generator loop that became contractible is reported as missing. Loops with `skip[i]` set (when

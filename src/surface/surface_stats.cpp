@@ -136,7 +136,7 @@ AtVertex count_at_vertex(const SurfaceMesh& mesh, const MeshAdjacency& A, int v,
 
 }  // namespace
 
-SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& A) {
+SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& A, std::vector<int>* face_label) {
   SurfaceStats s;
   const std::size_t nv = mesh.vertices.size();
   s.vertices = std::int64_t(nv);
@@ -192,6 +192,7 @@ SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& A) {
       s.genus += s.component_genus[c];
     }
   }
+  if (face_label) *face_label = std::move(label);
   s.closed_manifold = s.boundary_edges == 0 && s.nonmanifold_edges == 0 && s.nonmanifold_vertices == 0 &&
                       s.inconsistent_edges == 0;
   // Fixed chunks summed in order: the same sums for any thread count.

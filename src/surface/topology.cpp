@@ -56,8 +56,10 @@ struct SurfaceTopology::Impl {
     return *basis;
   }
 
-  Impl(const SurfaceMesh& m, const MeshAdjacency* a) : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
-    components = face_components(m, face_label);
+  Impl(const SurfaceMesh& m, const MeshAdjacency* a, std::vector<int>* labels = nullptr, int n_components = 0)
+      : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
+    if (labels) face_label = std::move(*labels), components = n_components;
+    else components = face_components(m, face_label);
     vertex_label.assign(m.vertices.size(), -1);
     for (size_t f = 0; f < m.faces.size(); ++f)
       for (int k = 0; k < 3; ++k) vertex_label[m.faces[f][k]] = face_label[f];
@@ -116,6 +118,11 @@ struct SurfaceTopology::Impl {
 SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh) : impl_(std::make_unique<Impl>(mesh, nullptr)) {}
 SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency)
     : impl_(std::make_unique<Impl>(mesh, &adjacency)) {}
+SurfaceTopology::SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency, std::vector<int> face_label,
+                                 int components) {
+  if (face_label.size() != mesh.faces.size()) throw Error("face labels do not match the surface's faces");
+  impl_ = std::make_unique<Impl>(mesh, &adjacency, &face_label, components);
+}
 SurfaceTopology::~SurfaceTopology() = default;
 
 int SurfaceTopology::cgal_queries() const {

@@ -71,6 +71,7 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh);
 bool turns_once_around(const SurfaceMesh& mesh, const MeshAdjacency& adjacency, int v);
 
 // surface_stats(mesh) from an adjacency already built for `mesh` (the same numbers, without building it).
-SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
+// `face_label`, when given, receives each face's component as face_components numbers them.
+SurfaceStats surface_stats(const SurfaceMesh& mesh, const MeshAdjacency& adjacency, std::vector<int>* face_label = nullptr);
 
 }  // namespace chokeloops

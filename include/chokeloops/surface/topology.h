@@ -21,6 +21,8 @@ class SurfaceTopology {
   explicit SurfaceTopology(const SurfaceMesh& mesh);
   // Shares a prebuilt adjacency of `mesh` (kept by reference: it must outlive this object).
   SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency);
+  // ... and the faces' components already found (face_components numbering, e.g. from surface_stats).
+  SurfaceTopology(const SurfaceMesh& mesh, const MeshAdjacency& adjacency, std::vector<int> face_label, int components);
   ~SurfaceTopology();
   SurfaceTopology(const SurfaceTopology&) = delete;
   SurfaceTopology& operator=(const SurfaceTopology&) = delete;
