@@ -13,6 +13,8 @@
 
 #include <Eigen/Dense>
 
+#include <tbb/global_control.h>
+
 #include "temp_dir.h"
 #include "chokeloops/analyze_molecule.h"
 #include "chokeloops/loops/channels.h"
@@ -224,6 +226,58 @@ TEST(MoleculeGramicidin, BottleneckAsHoleOnTheAxisWithItsLoopInThePore) {
   EXPECT_GT(thin, 100);
   for (auto& other : m.channels)
     EXPECT_EQ(other.traced, other.bottleneck_radius >= 0.9) << other.bottleneck_radius;
+}
+
+// The molecule pipeline builds the surface's adjacency and statistics beside the persistence when its memory
+// budget certainly holds both, and after it otherwise; on one thread or two. Every answer is the same.
+TEST(MoleculeGramicidin, SurfaceBesideThePersistenceOrAfterItOnAnyThreadCountGivesTheSameResults) {
+  auto run = [](std::size_t max_memory, int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    AnalyzeOptions ao;
+    ao.levelset.voxel_size = 0.25;
+    ao.levelset.max_memory = max_memory;
+    return analyze_molecule(kData + "/molecules/1grm_single_hole2.pdb", ao, MoleculeOptions{});
+  };
+  // 2.95M voxels: the field's guard needs 24 bytes a voxel + 64 MB (135 MB); overlapping needs the surface,
+  // 40 bytes a vertex and a face for its adjacency and statistics, and 48 bytes a voxel: 160 MB runs one
+  // after the other.
+  const std::size_t tight = std::size_t(160) << 20;
+  const MoleculeAnalysis beside = run(0, 2), after = run(tight, 2), one = run(0, 1);
+  {
+    const AnalyzeResult& a = beside.result;
+    const std::size_t voxels = std::size_t(a.grid.dims[0]) * a.grid.dims[1] * a.grid.dims[2];
+    const std::size_t v = a.surface.vertices.size(), f = a.surface.faces.size();
+    ASSERT_GT(48 * voxels + 24 * v + 12 * f + 40 * (v + f) + (std::size_t(16) << 20), tight);
+    ASSERT_GE(tight, 24 * voxels + (std::size_t(64) << 20));
+  }
+  for (const MoleculeAnalysis* m : {&after, &one}) {
+    const AnalyzeResult &a = beside.result, &b = m->result;
+    ASSERT_EQ(a.diagram.pairs.size(), b.diagram.pairs.size());
+    for (std::size_t i = 0; i < a.diagram.pairs.size(); ++i) {
+      ASSERT_EQ(a.diagram.pairs[i].birth_simplex, b.diagram.pairs[i].birth_simplex) << i;
+      ASSERT_EQ(a.diagram.pairs[i].death_simplex, b.diagram.pairs[i].death_simplex) << i;
+    }
+    EXPECT_EQ(a.surface.vertices, b.surface.vertices);
+    EXPECT_EQ(a.surface.faces, b.surface.faces);
+    EXPECT_EQ(a.surface_stats.genus, b.surface_stats.genus);
+    EXPECT_EQ(a.surface_stats.components, b.surface_stats.components);
+    EXPECT_EQ(a.surface_stats.component_genus, b.surface_stats.component_genus);
+    EXPECT_EQ(a.surface_stats.area, b.surface_stats.area);
+    EXPECT_EQ(a.surface_stats.enclosed_volume, b.surface_stats.enclosed_volume);
+    ASSERT_EQ(a.loops.size(), b.loops.size());
+    int found = 0;
+    for (std::size_t i = 0; i < a.loops.size(); ++i) {
+      EXPECT_EQ(a.loops[i].found, b.loops[i].found) << i;
+      EXPECT_EQ(a.loops[i].points, b.loops[i].points) << i;
+      EXPECT_EQ(a.loops[i].note, b.loops[i].note) << i;
+      found += a.loops[i].found;
+    }
+    EXPECT_GT(found, 0);
+    ASSERT_EQ(beside.channels.size(), m->channels.size());
+    for (std::size_t i = 0; i < beside.channels.size(); ++i)
+      EXPECT_EQ(beside.channels[i].bottleneck_radius, m->channels[i].bottleneck_radius) << i;
+  }
+  EXPECT_GT(beside.result.surface_stats.genus, 50);  // gramicidin's rings of atoms (64 at 0.25 A)
 }
 
 TEST(MoleculeInput, ElementsFromAtomNamesWhenColumnsHoldDigits) {

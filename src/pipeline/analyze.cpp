@@ -212,6 +212,11 @@ MeshAdjacency extract_checked_surface(AnalyzeResult& r, std::vector<int>& face_l
   MeshAdjacency adjacency = build_adjacency(r.surface);
   r.surface_stats = surface_stats(r.surface, adjacency, &face_label);
   r.timings_ms["surface"] = ms_since(t);
+  check_surface(r);
+  return adjacency;
+}
+
+void check_surface(AnalyzeResult& r) {
   const char* fault = std::getenv("CHOKELOOPS_TEST_FAULT");
   const bool injected = fault && std::string(fault) == "self-check";
   if ((r.surface_stats.genus != r.chokes.handle_generators && r.surface_stats.closed_manifold) || injected)
@@ -219,7 +224,6 @@ MeshAdjacency extract_checked_surface(AnalyzeResult& r, std::vector<int>& face_l
                         std::to_string(r.chokes.handle_generators) + " handle generators");
   if (!r.surface_stats.closed_manifold)
     r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
-  return adjacency;
 }
 
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context) {

@@ -12,9 +12,21 @@
 #include <chrono>
 #include <cstdio>
 
+#include "chokeloops/field/memory_budget.h"
 #include "loop_checks.h"
 
 namespace chokeloops {
+
+namespace {
+// What the surface's adjacency (vertex-face lists, twins, neighbours, cells) and its statistics' scratch
+// (per-vertex counts, the components' union-find and labels) take at most, from its vertex and face counts.
+std::size_t adjacency_and_stats_bytes(std::size_t vertices, std::size_t faces) {
+  return 40 * (vertices + faces) + (std::size_t(16) << 20);
+}
+// A rough field's persistence peaks near 40 bytes a voxel (README, Performance); a molecule's field is far
+// smoother, so this bounds it from above.
+constexpr std::size_t kPersistenceBoundPerVoxel = 48;
+}  // namespace
 
 MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions& analyze, const MoleculeOptions& options,
                                   const ProgressFn& progress) {
@@ -40,17 +52,51 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.grid = molecular_field(m.molecule, fo);
   r.timings_ms["levelset"] = ms(t);
 
+  // The surface does not depend on the diagram: once it is marched, its adjacency and statistics are built
+  // beside the persistence, which leaves part of a core idle (its sequential phases), when the budget
+  // certainly holds both; otherwise one after the other. Each is timed on its own; they overlap.
   t = Clock::now();
-  r.diagram = lower_star_persistence(
-      r.grid, [&](const char*, double f) { stage("persistence", f); return true; }, analyze.levelset.max_memory);
-  r.timings_ms["persistence"] = ms(t);
-  t = Clock::now();
-  stage("chokes", 0);
-  r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
-  r.timings_ms["chokes"] = ms(t);
   stage("surface", 0);
+  r.surface = extract_zero_surface(r.grid);
+  double surface_ms = ms(t);
+  const std::size_t budget = analyze.levelset.max_memory ? analyze.levelset.max_memory : default_max_memory();
+  // The persistence's guard gets what the surface (and, beside it, the adjacency) leaves of the budget.
+  const std::size_t surface_bytes = r.surface.vertices.size() * sizeof(r.surface.vertices[0]) +
+                                    r.surface.faces.size() * sizeof(r.surface.faces[0]);
+  const std::size_t beside = adjacency_and_stats_bytes(r.surface.vertices.size(), r.surface.faces.size());
+  const std::size_t voxels = std::size_t(r.grid.dims[0]) * std::size_t(r.grid.dims[1]) * std::size_t(r.grid.dims[2]);
+  const bool overlap = budget > surface_bytes + beside &&
+                       budget - surface_bytes - beside >= kPersistenceBoundPerVoxel * voxels;
+  const std::size_t persistence_budget =
+      std::max<std::size_t>(1, budget - std::min(budget, surface_bytes + (overlap ? beside : 0)));
   std::vector<int> face_label;
-  MeshAdjacency surface_adjacency = extract_checked_surface(r, face_label);
+  MeshAdjacency surface_adjacency;
+  auto build_surface_structures = [&] {
+    const auto ts = Clock::now();
+    surface_adjacency = build_adjacency(r.surface);
+    r.surface_stats = surface_stats(r.surface, surface_adjacency, &face_label);
+    surface_ms += ms(ts);
+  };
+  tbb::task_group surface_task;
+  if (overlap) surface_task.run(build_surface_structures);
+  try {
+    t = Clock::now();
+    r.diagram = lower_star_persistence(
+        r.grid, [&](const char*, double f) { stage("persistence", f); return true; },
+        persistence_budget);
+    r.timings_ms["persistence"] = ms(t);
+    t = Clock::now();
+    stage("chokes", 0);
+    r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
+    r.timings_ms["chokes"] = ms(t);
+  } catch (...) {
+    if (overlap) surface_task.wait();
+    throw;
+  }
+  if (overlap) surface_task.wait();
+  else build_surface_structures();
+  r.timings_ms["surface"] = surface_ms;
+  check_surface(r);
   // The loop stage's topology of the surface (its components, then its homology basis: serial passes over all
   // its faces, 2 s on maltoporin's 17.7M) is prepared beside the channels, which run in parallel and only read
   // the surface, rather than in the loop stage with every thread waiting on it. Timed with the channels.

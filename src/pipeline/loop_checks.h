@@ -19,6 +19,8 @@ namespace chokeloops {
 // differs from the handle generators is a bug (InternalError; CHOKELOOPS_TEST_FAULT=self-check forces it, so
 // that tests see how a bug is reported); an open one gets a warning.
 MeshAdjacency extract_checked_surface(AnalyzeResult& r, std::vector<int>& face_label);
+// Its checks alone, for a pipeline that builds r.surface and r.surface_stats itself (before r.chokes are known).
+void check_surface(AnalyzeResult& r);
 
 // What the loop stage shares between all chokes: the surface's adjacency, and its topology when some choke
 // is a generator (the choice of a generator's curve and the check below need it). The topology refers to the
