@@ -27,9 +27,11 @@
 #include "chokeloops/loops/membranes.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -456,9 +458,26 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
   if (topology) detail::make_generator_cycles(grid, chokes, cycles);
   LoopTracer tracer(grid, surface, adjacency, topology, topology ? &cycles.by_side : nullptr);
   std::vector<Loop> loops(chokes.size());
+  // Longest first, each thread taking the next choke when it is free: a few chokes can cost most of the
+  // stage (on maltoporin two of 22 tunnels flood the whole molecule, over a second each), and a split of the
+  // list into halves left one thread with both. Their cycle's extent (or else their depth) says which; each
+  // loop is traced on its own, so the order changes no result.
+  std::vector<std::size_t> order(chokes.size());
+  std::vector<double> extent(chokes.size(), 0.0);
+  for (std::size_t i = 0; i < chokes.size(); ++i) {
+    order[i] = i;
+    const detail::SideCycle* cycle = topology && i < cycles.own.size() ? cycles.own[i] : nullptr;
+    extent[i] = cycle ? std::hypot(cycle->hi[0] - cycle->lo[0], cycle->hi[1] - cycle->lo[1], cycle->hi[2] - cycle->lo[2])
+                      : chokes[i].depth;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return extent[a] > extent[b]; });
+  std::atomic<std::size_t> next{0};
+  const int workers = std::max(1, std::min(tbb::this_task_arena::max_concurrency(), int(chokes.size())));
   // One choke whose loop cannot be made (e.g. a membrane interface spanning two surface components of a
   // raw segmentation) is reported without a loop; it does not stop the others.
-  tbb::parallel_for(std::size_t(0), chokes.size(), [&](std::size_t i) {
+  tbb::parallel_for(0, workers, [&](int) {
+   for (std::size_t k = next++; k < order.size(); k = next++) {
+    const std::size_t i = order[k];
     const auto t0 = std::chrono::steady_clock::now();
     try {
       loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr);
@@ -468,6 +487,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
       loops[i].note = std::string("no loop: ") + e.what();
     }
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+   }
   }, tbb::simple_partitioner());
   if (topology && genus > 0) {
     int handles = 0, tunnels = 0;
