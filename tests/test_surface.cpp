@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 
 #include "analytic_fields.h"
 #include "chokeloops/output/mesh_write.h"
+#include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
 
 using namespace chokeloops;
@@ -362,4 +364,31 @@ TEST(Surface, StatisticsOfBrokenMeshesCountEachDefect) {
   EXPECT_EQ(s.component_genus, (std::vector<int>{0, -1}));
   EXPECT_EQ(s.genus, 0);
   EXPECT_EQ(s.euler, 2 + 1);
+
+  // Each vertex's neighbours, read from its faces, are the other ends of its edges, rising, on every mesh
+  // above and on a marched torus; edges and edge tests agree with them.
+  SurfaceMesh torus = extract_zero_surface(cube_field(40, analytic::torus(0.3, 0.12)));
+  for (const SurfaceMesh* m : {&tet, &bowtie, &book, &flipped, &two, &torus}) {
+    std::vector<std::vector<int>> expected(m->vertices.size());
+    for (const auto& f : m->faces)
+      for (int k = 0; k < 3; ++k) {
+        expected[std::size_t(f[k])].push_back(f[(k + 1) % 3]);
+        expected[std::size_t(f[(k + 1) % 3])].push_back(f[k]);
+      }
+    const MeshAdjacency A = build_adjacency(*m);
+    std::vector<int> got;
+    std::int64_t ends = 0;
+    for (std::size_t v = 0; v < m->vertices.size(); ++v) {
+      auto& e = expected[v];
+      std::sort(e.begin(), e.end());
+      e.erase(std::unique(e.begin(), e.end()), e.end());
+      A.neighbours(*m, int(v), got);
+      ASSERT_EQ(got, e) << "vertex " << v;
+      ends += std::int64_t(e.size());
+      for (int w : e) ASSERT_TRUE(A.has_edge(*m, int(v), w) && A.has_edge(*m, w, int(v)));
+      if (!e.empty()) EXPECT_FALSE(A.has_edge(*m, int(v), int(v)));
+    }
+    EXPECT_EQ(ends, 2 * surface_stats(*m, A).edges);
+  }
+  EXPECT_GT(torus.vertices.size(), 1000u);
 }

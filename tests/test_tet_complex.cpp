@@ -87,7 +87,7 @@ void expect_loops_on_input_edges(const TetAnalysis& a) {
     EXPECT_TRUE(l.verified);
     const auto& p = l.loop.edge_path;
     ASSERT_GE(p.size(), 3u);
-    for (std::size_t k = 0; k < p.size(); ++k) EXPECT_TRUE(adj.has_edge(p[k], p[(k + 1) % p.size()]));
+    for (std::size_t k = 0; k < p.size(); ++k) EXPECT_TRUE(adj.has_edge(a.input, p[k], p[(k + 1) % p.size()]));
     if (l.loop.choke.kind == Kind::Generator) EXPECT_FALSE(loop_is_contractible(a.input, p));
     ASSERT_EQ(l.where.size(), l.loop.points.size());
     for (std::size_t k = 0; k < l.where.size(); ++k) {
@@ -97,7 +97,7 @@ void expect_loops_on_input_edges(const TetAnalysis& a) {
       if (w.vertex >= 0) {
         on = a.input.vertices[std::size_t(w.vertex)];
       } else {
-        ASSERT_TRUE(adj.has_edge(w.edge[0], w.edge[1]));
+        ASSERT_TRUE(adj.has_edge(a.input, w.edge[0], w.edge[1]));
         const auto &u = a.input.vertices[std::size_t(w.edge[0])], &v = a.input.vertices[std::size_t(w.edge[1])];
         for (int c = 0; c < 3; ++c) on[std::size_t(c)] = u[std::size_t(c)] + w.t * (v[std::size_t(c)] - u[std::size_t(c)]);
       }

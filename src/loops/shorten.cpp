@@ -29,7 +29,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     int a = loop[i], b = loop[(i + 1) % loop.size()];
     if (a < 0 || b < 0 || size_t(a) >= mesh.vertices.size() || size_t(b) >= mesh.vertices.size())
       throw Error("loop vertex index out of range");
-    if (loop.size() > 1 && !adj.has_edge(a, b)) throw Error("loop vertices are not joined by a mesh edge");
+    if (loop.size() > 1 && !adj.has_edge(mesh, a, b)) throw Error("loop vertices are not joined by a mesh edge");
   }
   R.edge_path = loop;
   R.points = loop_points(mesh, loop);
@@ -43,11 +43,12 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   std::vector<int> region, ring;
   for (int v : loop)
     if (rid.emplace(v, int(region.size())).second) region.push_back(v), ring.push_back(0);
+  std::vector<int> around;
   for (size_t i = 0; i < region.size(); ++i) {
     int v = region[i];
     if (ring[i] >= max_rings) continue;
-    for (int j = adj.vv_start[v]; j < adj.vv_start[v + 1]; ++j) {
-      int w = adj.vv[j];
+    adj.neighbours(mesh, v, around);
+    for (int w : around) {
       if (rid.emplace(w, int(region.size())).second) region.push_back(w), ring.push_back(ring[i] + 1);
     }
   }
@@ -62,10 +63,11 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       q.pop();
       if (d > dist[i] || d > opt.max_move) continue;
       int v = region[i];
-      for (int j = adj.vv_start[v]; j < adj.vv_start[v + 1]; ++j) {
-        auto it = rid.find(adj.vv[j]);
+      adj.neighbours(mesh, v, around);
+      for (int w : around) {
+        auto it = rid.find(w);
         if (it == rid.end()) continue;
-        double nd = d + dist3(mesh.vertices[v], mesh.vertices[adj.vv[j]]);
+        double nd = d + dist3(mesh.vertices[v], mesh.vertices[w]);
         if (nd < dist[it->second]) dist[it->second] = nd, q.push({nd, it->second});
       }
     }

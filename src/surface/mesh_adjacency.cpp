@@ -37,8 +37,19 @@ bool turns_once_around(const SurfaceMesh& mesh, const MeshAdjacency& A, int v) {
   return h == start && turns == b1 - b0;
 }
 
-bool MeshAdjacency::has_edge(int a, int b) const {
-  return std::binary_search(vv.begin() + vv_start[a], vv.begin() + vv_start[a + 1], b);
+bool MeshAdjacency::has_edge(const SurfaceMesh& m, int a, int b) const {
+  return halfedge(m, a, b) >= 0 || halfedge(m, b, a) >= 0;
+}
+
+void MeshAdjacency::neighbours(const SurfaceMesh& m, int v, std::vector<int>& out) const {
+  out.clear();
+  for (int i = vf_start[std::size_t(v)]; i < vf_start[std::size_t(v) + 1]; ++i) {
+    const auto& t = m.faces[std::size_t(vf[std::size_t(i)])];
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == v) out.push_back(t[(k + 1) % 3]), out.push_back(t[(k + 2) % 3]);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 namespace {
@@ -125,40 +136,20 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
   const std::size_t nf = mesh.faces.size(), nv = mesh.vertices.size();
   vertex_faces(mesh, A.vf_start, A.vf);
   A.twin.assign(3 * nf, -1);
-  A.vv_start.assign(nv + 1, 0);
   // Each edge is read at its smaller end, so every twin is written once.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<HalfedgeAt> at;
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
       halfedges_at(mesh, A.vf, A.vf_start[v], A.vf_start[v + 1], int(v), at);
-      int neighbours = 0;
       for (std::size_t i = 0; i < at.size();) {
         std::size_t j = i;
         while (j < at.size() && at[j].other == at[i].other) ++j;
-        ++neighbours;
         if (j - i == 2 && at[i].other >= int(v)) {
           A.twin[std::size_t(at[i].h)] = at[i + 1].h;
           A.twin[std::size_t(at[i + 1].h)] = at[i].h;
         }
         i = j;
       }
-      A.vv_start[v + 1] = neighbours;
-    }
-  });
-  for (std::size_t v = 0; v < nv; ++v) A.vv_start[v + 1] += A.vv_start[v];
-  A.vv.resize(std::size_t(A.vv_start[nv]));
-  // The neighbours are the other ends of the edges at v: sorting their ids alone is cheaper than the groups.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<int> ends;
-    for (std::size_t v = r.begin(); v < r.end(); ++v) {
-      ends.clear();
-      for (int i = A.vf_start[v]; i < A.vf_start[v + 1]; ++i) {
-        const auto& t = mesh.faces[std::size_t(A.vf[std::size_t(i)])];
-        for (int k = 0; k < 3; ++k)
-          if (t[k] == int(v)) ends.push_back(t[(k + 1) % 3]), ends.push_back(t[(k + 2) % 3]);
-      }
-      std::sort(ends.begin(), ends.end());
-      std::unique_copy(ends.begin(), ends.end(), A.vv.begin() + A.vv_start[v]);
     }
   });
   build_vertex_cells(mesh, A);

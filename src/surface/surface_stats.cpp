@@ -96,9 +96,21 @@ AtVertex count_at_vertex(const SurfaceMesh& mesh, const MeshAdjacency& A, int v,
   AtVertex out;
   const int b0 = A.vf_start[std::size_t(v)], b1 = A.vf_start[std::size_t(v) + 1];
   if (b0 == b1) return out;
-  const auto vv0 = A.vv.begin() + A.vv_start[std::size_t(v)], vv1 = A.vv.begin() + A.vv_start[std::size_t(v) + 1];
-  out.edges = int(vv1 - std::lower_bound(vv0, vv1, v));
-  if (turns_once_around(mesh, A, v)) return out;  // the usual vertex: one disc of faces, nothing more to count
+  // The usual vertex: one disc of faces, each with one corner here, whose next vertices are its neighbours,
+  // each once (a neighbour met twice would leave its edge four half-edges and no twins).
+  auto disc_edges = [&]() -> int {
+    int edges = 0;
+    for (int i = b0; i < b1; ++i) {
+      if (i > b0 && A.vf[std::size_t(i)] == A.vf[std::size_t(i - 1)]) return -1;  // two corners here
+      const auto& t = mesh.faces[std::size_t(A.vf[std::size_t(i)])];
+      const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+      edges += t[(k + 1) % 3] > v;
+    }
+    return edges;
+  };
+  if (turns_once_around(mesh, A, v) && (out.edges = disc_edges()) >= 0) return out;
+  A.neighbours(mesh, v, fan);
+  out.edges = int(fan.end() - std::upper_bound(fan.begin(), fan.end(), v));
   const auto f0 = A.vf.begin() + b0, f1 = A.vf.begin() + b1;
   auto slot = [&](int f) { return int(std::lower_bound(f0, f1, f) - f0); };  // faces around v rise
   fan.resize(std::size_t(b1 - b0));

@@ -85,7 +85,7 @@ struct SurfaceTopology::Impl {
       if (v < 0 || size_t(v) >= mesh.vertices.size()) throw Error("loop vertex index out of range");
     for (size_t i = 0; i < loop.size(); ++i) {
       int a = loop[i], b = loop[(i + 1) % loop.size()];
-      if (!adj.has_edge(a, b)) throw Error("loop vertices " + std::to_string(a) + " and " + std::to_string(b) +
+      if (!adj.has_edge(mesh, a, b)) throw Error("loop vertices " + std::to_string(a) + " and " + std::to_string(b) +
                                            " are not joined by a mesh edge");
     }
   }
@@ -330,7 +330,7 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
   // points are then not joined near the polyline).
   struct State { double d; int from; };
   std::unordered_map<int, State> state;
-  std::vector<int> path;
+  std::vector<int> path, around;
   for (size_t i = 0; i < snapped.size(); ++i) {
     const int s = snapped[i], t = snapped[(i + 1) % snapped.size()];
     const double limit = 2 * dist(mesh.vertices[s], mesh.vertices[t]) + 4 * margin;
@@ -346,8 +346,8 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
       if (dv > state[v].d) continue;
       if (v == t) { reached = true; break; }
       if (dv > limit) break;
-      for (int j = A.vv_start[v]; j < A.vv_start[v + 1]; ++j) {
-        const int w = A.vv[j];
+      A.neighbours(mesh, v, around);
+      for (const int w : around) {
         if (!accept(w)) continue;
         const double nd = dv + dist(mesh.vertices[v], mesh.vertices[w]);
         auto it = state.find(w);

@@ -12,8 +12,7 @@ namespace chokeloops {
 
 struct MeshAdjacency {
   std::vector<int> twin;                 // size 3*faces
-  std::vector<int> vf_start, vf;         // CSR: faces around each vertex (unordered)
-  std::vector<int> vv_start, vv;         // CSR: neighbour vertices of each vertex (sorted)
+  std::vector<int> vf_start, vf;         // CSR: faces around each vertex (rising)
   // The vertices in a uniform grid of cells about twice the mean edge long (CSR over cells), so that a
   // point's nearest vertex costs a few cells, not a scan of the mesh.
   std::array<double, 3> cell_origin{0, 0, 0};
@@ -27,7 +26,10 @@ struct MeshAdjacency {
   static int prev(int h) { return h - h % 3 + (h % 3 + 2) % 3; }
   // Half-edge a -> b inside some face, or -1 when no face has it.
   int halfedge(const SurfaceMesh& m, int a, int b) const;
-  bool has_edge(int a, int b) const;
+  bool has_edge(const SurfaceMesh& m, int a, int b) const;
+  // The vertices joined to v by an edge, rising, read from v's faces: a neighbour list per vertex would be
+  // another 4 bytes a half-edge to allocate and fill, and its readers are local searches.
+  void neighbours(const SurfaceMesh& m, int v, std::vector<int>& out) const;
   // The vertex nearest to p among those within `radius` of it for which accept(v) is true, or -1.
   template <class Accept>
   int nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius, Accept&& accept) const;
