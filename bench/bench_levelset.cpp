@@ -1,5 +1,5 @@
 // Benchmark of the levelset stage: mesh → dense signed distance grid, wall time (median of N runs)
-// and peak RSS, for bunny, armadillo, fertility and neptune at --resolution 256 (issue 3).
+// and peak RSS, for bunny, armadillo, fertility and neptune at --resolution 256.
 // Then, per model, each sub-stage's median time and peak RSS within it (VmHWM reset per stage).
 // usage: bench_levelset [runs=3] [resolution=256] [mesh paths...]
 #include <sys/resource.h>

@@ -1,4 +1,4 @@
-// Molecules end to end (issue 11): gramicidin A and maltoporin at 0.25 Å, and a lattice of maltoporin copies
+// Molecules end to end: gramicidin A and maltoporin at 0.25 Å, and a lattice of maltoporin copies
 // (>= 100K atoms) at 0.5 Å. Each run is a fresh process (this program re-executed with --child), as the CLI
 // runs; per-stage medians over --runs and the largest peak RSS.
 //
@@ -60,6 +60,7 @@ int child(const std::string& file, double voxel, double min_radius) {
   MoleculeOptions mo;
   if (min_radius >= 0) mo.channels.min_radius = min_radius;
   try {
+    chokeloops::keep_freed_memory();  // as the CLI does for a molecule
     MoleculeAnalysis m = analyze_molecule(file, ao, mo);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);

@@ -1,4 +1,4 @@
-// Benchmark of lower-star persistence (issue 2):
+// Benchmark of lower-star persistence:
 //   torus        signed distance of a torus R = 0.3, r = 0.12 centred in the unit cube, x_i = i/(n-1)
 //   torus+noise  the same plus uniform noise in [-0.02, 0.02] (fixed seed)
 //   random       a smooth random field: sum of 30 random Gaussian bumps (fixed seed)

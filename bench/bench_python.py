@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmarks of the Python module (issue 16); prints medians.
+"""Benchmarks of the Python module; prints medians.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [--runs 3] [--resolution 256]
         [--batch-resolution 128] [--skip-overhead] [--skip-batch]

@@ -1,4 +1,4 @@
-// Benchmark of medical volumes end to end (issue 12): read → signed distance on the image lattice →
+// Benchmark of medical volumes end to end: read → signed distance on the image lattice →
 // persistence → chokes → surface → loops → report + label volumes, per-stage wall times and the peak RSS of
 // each case (each case runs in a forked child, whose getrusage maxrss is the case's alone).
 // usage: bench_volumes [--max-loops N] [case...]   (loops traced for the N most persistent chokes; default 20)

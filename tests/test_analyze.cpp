@@ -1,4 +1,4 @@
-// End-to-end loops on analytic shapes whose answer is known (issue 4): counts, positions and lengths of
+// End-to-end loops on analytic shapes whose answer is known: counts, positions and lengths of
 // the loops, and their topology on the output surface checked with CGAL's Surface_mesh_topology.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -1,4 +1,4 @@
-// Real meshes (issue 4): every closed mesh of data/MANIFEST.tsv gets exactly g handle and g tunnel
+// Real meshes: every closed mesh of data/MANIFEST.tsv gets exactly g handle and g tunnel
 // generators and a surface of genus g; the bunny's neck; and a grid too coarse for a genus says so.
 #include <gtest/gtest.h>
 

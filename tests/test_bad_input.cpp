@@ -1,4 +1,4 @@
-// Bad input suite for `chokeloops levelset` (issue 3): every case exits with code 2 and a one-line
+// Bad input suite for `chokeloops levelset`: every case exits with code 2 and a one-line
 // message naming the file and the problem, never a crash. Fixtures are generated at run time.
 // CliRun under ASan/UBSan with scripts/test-sanitize.sh.
 #include <gtest/gtest.h>

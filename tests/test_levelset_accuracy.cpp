@@ -1,4 +1,4 @@
-// Distance accuracy of mesh → signed distance on meshed spheres and tori of known radius (issue 3).
+// Distance accuracy of mesh → signed distance on meshed spheres and tori of known radius.
 #include <gtest/gtest.h>
 
 #include <cmath>

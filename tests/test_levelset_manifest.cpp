@@ -1,5 +1,5 @@
 // Every mesh of data/MANIFEST.tsv loads and converts at a modest resolution; closed ones
-// report the genus listed there; open/messy ones give a warning and a usable grid (issue 3).
+// report the genus listed there; open/messy ones give a warning and a usable grid.
 #include <gtest/gtest.h>
 
 #include <filesystem>

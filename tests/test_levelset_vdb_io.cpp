@@ -195,7 +195,7 @@ TEST(LevelSetVdbInput, NarrowBandSphereIsExtendedToThePaddedBox) {
       }
   std::printf("vdb narrow-band sphere extended by the feature transform: max error %.3f voxel\n", worst / h);
   EXPECT_EQ(wrong_sign, 0u);
-  EXPECT_LE(worst, 1.0 * h);  // issue 3's bar deep inside (fast sweeping, used before, gave 1.19)
+  EXPECT_LE(worst, 1.0 * h);  // the level set's 1-voxel bar deep inside (fast sweeping, used before, gave 1.19)
 }
 
 TEST(LevelSetVdbInput, FogVolumeBecomesSignedDistanceAtIso) {
@@ -233,7 +233,7 @@ TEST(LevelSetVdbInput, FogVolumeBecomesSignedDistanceAtIso) {
 
 TEST(LevelSetVdbInput, NonDistanceLevelSetIsRedistanced) {
   // A sphere and a torus given by polynomials whose gradient is far from 1 (|grad| = 2r on the sphere): the
-  // grid must become their signed distance, with the accuracy asked of meshes (issue 3: 0.5 voxel near
+  // grid must become their signed distance, with the accuracy asked of meshes (0.5 voxel near
   // the surface, 1 voxel deep inside), and the zero level set must stay where the input put it.
   ensure_openvdb_initialized();
   struct Shape {

@@ -90,7 +90,7 @@ std::vector<Case> all_cases() {
   unsigned seed = 1;
   for (auto& s : shapes)
     for (Kind k : kinds) cases.push_back({s, k, 1000 + 7919 * seed++});
-  // A few larger ones (beyond the 12^3 of the issue): longer dim-1 reduction chains.
+  // A few larger ones (beyond 12^3): longer dim-1 reduction chains.
   cases.push_back({{16, 16, 16}, Kind::Uniform, 5});
   cases.push_back({{20, 17, 13}, Kind::Plateau3, 6});
   cases.push_back({{24, 8, 16}, Kind::SmoothNoise, 7});

@@ -1,4 +1,4 @@
-// Medical volumes (issue 12): NIfTI/NRRD in, masks with known answers, world coordinates through an oblique
+// Medical volumes: NIfTI/NRRD in, masks with known answers, world coordinates through an oblique
 // sform with anisotropic spacing, label volumes out, bad input as one-line errors with exit code 2.
 #include <gtest/gtest.h>
 

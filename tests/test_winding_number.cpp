@@ -1,5 +1,5 @@
 // Generalised winding number (fast, Barill et al. style) and the sign it gives to meshes that stay open
-// after repair (issue 3, item 5).
+// after repair.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -13,6 +13,7 @@
 
 #include "chokeloops/analyze.h"
 #include "chokeloops/analyze_molecule.h"
+#include "chokeloops/huge_pages.h"
 #include "chokeloops/output/view.h"
 #include "chokeloops/tet/tet_field.h"  // options only: the path itself is built with CHOKELOOPS_TETGEN
 #ifdef CHOKELOOPS_HAS_TETGEN
@@ -288,6 +289,7 @@ int run(std::vector<std::string> args) {
   if (is_molecule_path(input)) {
     if (!grid_flags.empty() || options.resolution_auto)
       throw Error("--resolution does not apply to molecules; use --voxel-size in Å (" + std::string("see chokeloops analyze --help") + ")");
+    keep_freed_memory();
     MoleculeAnalysis m = analyze_molecule(input, options, molecule, std::ref(progress));
     auto t = std::chrono::steady_clock::now();
     write_report(m.result, options, outdir);

@@ -1,5 +1,6 @@
 #include "chokeloops/huge_pages.h"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -28,6 +29,13 @@ void restart_with_huge_pages(char** argv) {
   // still here: the restart failed; run as is, and do not leave the variable to children that would not need it
   if (tunables) setenv("GLIBC_TUNABLES", tunables, 1);
   else unsetenv("GLIBC_TUNABLES");
+}
+
+void keep_freed_memory() {
+  const char* opt = std::getenv("CHOKELOOPS_KEEP_FREED_MEMORY");
+  if (opt && std::string(opt) == "0") return;
+  mallopt(M_MMAP_MAX, 0);                 // large blocks from the heap, not from mmap
+  mallopt(M_TRIM_THRESHOLD, 0x7fffffff);  // and freed ones kept there for reuse
 }
 
 }  // namespace chokeloops
