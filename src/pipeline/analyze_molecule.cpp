@@ -18,7 +18,7 @@
 namespace chokeloops {
 
 namespace {
-// What the surface's adjacency (vertex-face lists, twins, neighbours, cells) and its statistics' scratch
+// What the surface's adjacency (vertex-face lists, twins, vertex cells) and its statistics' scratch
 // (per-vertex counts, the components' union-find and labels) take at most, from its vertex and face counts.
 std::size_t adjacency_and_stats_bytes(std::size_t vertices, std::size_t faces) {
   return 40 * (vertices + faces) + (std::size_t(16) << 20);
