@@ -97,6 +97,14 @@ class Engine {
   }
 
   void classify();
+  // The lower masks and steepest steps (slots, -1 for none) of `count` interior vertices of a row from `first`.
+  struct RowScratch {
+    std::vector<std::uint32_t> lower;
+    std::vector<std::int32_t> lo, hi;
+    std::vector<float> lowest, highest;
+    void resize(std::size_t n) { lower.resize(n), lo.resize(n), hi.resize(n), lowest.resize(n), highest.resize(n); }
+  };
+  void classify_interior_row(Id first, int count, RowScratch& out) const;
   // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
   void guard_memory(PersistenceDiagram& out);
 
