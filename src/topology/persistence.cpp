@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <limits>
 #include <cstdio>
+#include <cstring>
 #include <string>
 
 #include "chokeloops/field/memory_budget.h"
@@ -89,6 +90,36 @@ PersistenceDiagram Engine::run() {
   return out;
 }
 
+namespace {
+// One slot of classify_interior_row's pass in rising index order, over `count` vertices. All-ones masks and
+// bitwise selects: written with ?: or as float selects, GCC keeps a branch and does not vectorise.
+void take_lowest_and_highest(int count, std::int32_t slot, const float* __restrict x, const std::uint32_t* __restrict lower,
+                             std::int32_t* __restrict lo, std::int32_t* __restrict hi, float* __restrict lowest,
+                             float* __restrict highest) {
+  for (int i = 0; i < count; ++i) {
+    const float xi = x[i], low = lowest[i], high = highest[i];
+    const std::int32_t is_lower = -std::int32_t((lower[i] >> slot) & 1u);
+    const std::int32_t take_lo = is_lower & -std::int32_t(xi < low);
+    const std::int32_t take_hi = ~is_lower & -std::int32_t(xi >= high);
+    lo[i] = (lo[i] & ~take_lo) | (slot & take_lo);
+    hi[i] = (hi[i] & ~take_hi) | (slot & take_hi);
+    std::int32_t bits_x, bits_low, bits_high;
+    std::memcpy(&bits_x, &xi, 4), std::memcpy(&bits_low, &low, 4), std::memcpy(&bits_high, &high, 4);
+    bits_low = (bits_low & ~take_lo) | (bits_x & take_lo);
+    bits_high = (bits_high & ~take_hi) | (bits_x & take_hi);
+    std::memcpy(&lowest[i], &bits_low, 4), std::memcpy(&highest[i], &bits_high, 4);
+  }
+}
+
+void add_lower_bits(int count, std::uint32_t bit, bool ties_lower, const float* __restrict x,
+                    const float* __restrict centre, std::uint32_t* __restrict lower) {
+  if (!ties_lower)
+    for (int i = 0; i < count; ++i) lower[i] |= x[i] < centre[i] ? bit : 0u;
+  else
+    for (int i = 0; i < count; ++i) lower[i] |= x[i] <= centre[i] ? bit : 0u;
+}
+}  // namespace
+
 // Inside the box a neighbour's index is above v's for slots 0-6 and below it for slots 7-13, and the slots in
 // rising index order are 13..7, 0..6: the order's tie on equal values needs no index comparison, and the
 // lowest lower and highest upper neighbours come from one pass over the slots in that order (a strictly lower
@@ -97,38 +128,16 @@ PersistenceDiagram Engine::run() {
 // branches were unpredictable and cost most of the classification.
 void Engine::classify_interior_row(Id first, int count, RowScratch& out) const {
   static constexpr int kRising[14] = {13, 12, 11, 10, 9, 8, 7, 0, 1, 2, 3, 4, 5, 6};
-  const float* __restrict centre = f_ + first;
-  std::uint32_t* __restrict lower = out.lower.data();
-  std::int32_t* __restrict lo = out.lo.data();
-  std::int32_t* __restrict hi = out.hi.data();
-  float* __restrict lowest = out.lowest.data();
-  float* __restrict highest = out.highest.data();
+  const float* centre = f_ + first;
   for (int i = 0; i < count; ++i) {
-    lower[i] = 0, lo[i] = -1, hi[i] = -1;
-    lowest[i] = std::numeric_limits<float>::infinity();
-    highest[i] = -std::numeric_limits<float>::infinity();
+    out.lower[std::size_t(i)] = 0, out.lo[std::size_t(i)] = -1, out.hi[std::size_t(i)] = -1;
+    out.lowest[std::size_t(i)] = std::numeric_limits<float>::infinity();
+    out.highest[std::size_t(i)] = -std::numeric_limits<float>::infinity();
   }
-  for (int n = 0; n < 14; ++n) {
-    const float* __restrict x = centre + delta_[n];
-    const std::uint32_t bit = 1u << n;
-    if (n < 7)
-      for (int i = 0; i < count; ++i) lower[i] |= x[i] < centre[i] ? bit : 0u;
-    else
-      for (int i = 0; i < count; ++i) lower[i] |= x[i] <= centre[i] ? bit : 0u;
-  }
-  for (int t = 0; t < 14; ++t) {
-    const int n = kRising[t];
-    const float* __restrict x = centre + delta_[n];
-    for (int i = 0; i < count; ++i) {
-      const bool is_lower = (lower[i] >> n) & 1u;
-      const bool take_lo = is_lower && x[i] < lowest[i];
-      const bool take_hi = !is_lower && x[i] >= highest[i];
-      lo[i] = take_lo ? n : lo[i];
-      lowest[i] = take_lo ? x[i] : lowest[i];
-      hi[i] = take_hi ? n : hi[i];
-      highest[i] = take_hi ? x[i] : highest[i];
-    }
-  }
+  for (int n = 0; n < 14; ++n) add_lower_bits(count, 1u << n, n >= 7, centre + delta_[n], centre, out.lower.data());
+  for (int t = 0; t < 14; ++t)
+    take_lowest_and_highest(count, kRising[t], centre + delta_[kRising[t]], out.lower.data(), out.lo.data(),
+                            out.hi.data(), out.lowest.data(), out.highest.data());
 }
 
 void Engine::classify() {
