@@ -24,15 +24,18 @@ struct FloodBox {
   Id base = 0;                         // grid id of local (0, 0, 0)
   Id gy = 0, gz = 0;                   // grid strides
   std::size_t ly = 0, lz = 0;          // local strides
-  const std::vector<std::uint32_t>* cell = nullptr;  // per box vertex: zone (bits 0-1), border bit, level
+  // per box vertex: zone (bits 0-1), border bit, level; in 16 bits when the levels fit, else in 32
+  const std::vector<std::uint16_t>* cell16 = nullptr;
+  const std::vector<std::uint32_t>* cell = nullptr;
   const std::vector<std::uint8_t>* contact = nullptr;  // 1: a neighbour carries the other zone
   std::vector<std::uint32_t> shore;    // labelled box vertices in contact, with a neighbour outside the region
   std::array<std::array<double, 3>, 2> seed_centroid{};  // of each seed piece, grid coordinates
   std::array<std::size_t, 2> seed_count{0, 0};
 
-  std::uint32_t zone(std::uint32_t li) const { return (*cell)[li] & kZone; }
-  std::uint32_t level(std::uint32_t li) const { return (*cell)[li] >> kLevelShift; }  // 0: below the saddle
-  bool on_border(std::uint32_t li) const { return (*cell)[li] & kBorder; }
+  std::uint32_t word(std::uint32_t li) const { return cell16 ? (*cell16)[li] : (*cell)[li]; }
+  std::uint32_t zone(std::uint32_t li) const { return word(li) & kZone; }
+  std::uint32_t level(std::uint32_t li) const { return word(li) >> kLevelShift; }  // 0: below the saddle
+  bool on_border(std::uint32_t li) const { return word(li) & kBorder; }
   bool in_contact(std::uint32_t li) const { return (*contact)[li] != 0; }
   std::array<int, 3> local(std::uint32_t li) const {
     const int k = int(li / lz), rest = int(li % lz);
