@@ -145,10 +145,11 @@ void rasterise(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
             const int i0 = std::max(0, int(std::ceil((p[0] - ry - g.origin[0]) / h)));
             const int i1 = std::min(nx - 1, int(std::floor((p[0] + ry - g.origin[0]) / h)));
             float* row = &g.values[std::size_t(g.index(0, j, k))];
+            const double dyz2 = dy * dy + dz * dz, Ri = R[std::size_t(i)];
+            // branch-free, so that it vectorises (CMakeLists.txt builds this file without -frounding-math)
             for (int x = i0; x <= i1; ++x) {
               const double dx = g.origin[0] + x * h - p[0];
-              const float d = float(std::sqrt(dx * dx + dy * dy + dz * dz) - R[std::size_t(i)]);
-              if (d < row[x]) row[x] = d;
+              row[x] = std::min(row[x], float(std::sqrt(dx * dx + dyz2) - Ri));
             }
           }
         }
