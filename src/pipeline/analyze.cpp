@@ -227,11 +227,16 @@ void check_surface(AnalyzeResult& r) {
 }
 
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context) {
-  context.adjacency = std::move(adjacency);
   bool any_generator = false;
   for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
+  prepare_loops(r, std::move(adjacency), std::move(face_label), any_generator, context);
+}
+
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, bool with_topology,
+                   LoopContext& context) {
+  context.adjacency = std::move(adjacency);
   // One topology of the surface serves the choice of every generator's curve and the check after.
-  if (any_generator)
+  if (with_topology)
     context.topology = std::make_unique<SurfaceTopology>(r.surface, context.adjacency, std::move(face_label),
                                                          int(r.surface_stats.components));
 }

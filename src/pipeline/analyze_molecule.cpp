@@ -26,6 +26,9 @@ std::size_t adjacency_and_stats_bytes(std::size_t vertices, std::size_t faces) {
 // A rough field's persistence peaks near 40 bytes a voxel (README, Performance); a molecule's field is far
 // smoother, so this bounds it from above.
 constexpr std::size_t kPersistenceBoundPerVoxel = 48;
+// What the loop stage's topology adds to them: its vertex labels and union-find (8 bytes a vertex), the
+// homology basis's byte a half-edge and DFS interval a face (11 bytes a face).
+std::size_t topology_bytes(std::size_t vertices, std::size_t faces) { return 12 * vertices + 12 * faces; }
 }  // namespace
 
 MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions& analyze, const MoleculeOptions& options,
@@ -52,18 +55,20 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.grid = molecular_field(m.molecule, fo);
   r.timings_ms["levelset"] = ms(t);
 
-  // The surface does not depend on the diagram: once it is marched, its adjacency and statistics are built
-  // beside the persistence, which leaves part of a core idle (its sequential phases), when the budget
-  // certainly holds both; otherwise one after the other. Each is timed on its own; they overlap.
+  // The surface does not depend on the diagram: once it is marched, its adjacency and statistics, and (on a
+  // surface with handles) its topology and homology basis for the loop stage, are built beside the
+  // persistence, the chokes and the channels, which leave part of a core idle (their sequential phases), when
+  // the budget certainly holds both; otherwise the adjacency after the persistence, and the topology beside
+  // the channels (which only read the surface). Each is timed on its own; they overlap.
   t = Clock::now();
   stage("surface", 0);
   r.surface = extract_zero_surface(r.grid);
   double surface_ms = ms(t);
   const std::size_t budget = analyze.levelset.max_memory ? analyze.levelset.max_memory : default_max_memory();
-  // The persistence's guard gets what the surface (and, beside it, the adjacency) leaves of the budget.
-  const std::size_t surface_bytes = r.surface.vertices.size() * sizeof(r.surface.vertices[0]) +
-                                    r.surface.faces.size() * sizeof(r.surface.faces[0]);
-  const std::size_t beside = adjacency_and_stats_bytes(r.surface.vertices.size(), r.surface.faces.size());
+  // The persistence's guard gets what the surface (and, beside it, its structures) leaves of the budget.
+  const std::size_t V = r.surface.vertices.size(), F = r.surface.faces.size();
+  const std::size_t surface_bytes = V * sizeof(r.surface.vertices[0]) + F * sizeof(r.surface.faces[0]);
+  const std::size_t beside = adjacency_and_stats_bytes(V, F) + topology_bytes(V, F);
   const std::size_t voxels = std::size_t(r.grid.dims[0]) * std::size_t(r.grid.dims[1]) * std::size_t(r.grid.dims[2]);
   const bool overlap = budget > surface_bytes + beside &&
                        budget - surface_bytes - beside >= kPersistenceBoundPerVoxel * voxels;
@@ -71,14 +76,47 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
       std::max<std::size_t>(1, budget - std::min(budget, surface_bytes + (overlap ? beside : 0)));
   std::vector<int> face_label;
   MeshAdjacency surface_adjacency;
+  LoopContext context;
   auto build_surface_structures = [&] {
     const auto ts = Clock::now();
     surface_adjacency = build_adjacency(r.surface);
     r.surface_stats = surface_stats(r.surface, surface_adjacency, &face_label);
     surface_ms += ms(ts);
   };
+  // The loop stage's topology of the surface: its components, then its homology basis (serial passes over all
+  // its faces, about 1 s on maltoporin's 17.7M).
+  auto build_topology = [&](bool with_topology) {
+    prepare_loops(r, std::move(surface_adjacency), std::move(face_label), with_topology, context);
+    if (context.topology) context.topology->prepare_homology();
+  };
+  std::vector<std::array<double, 3>> centres;
+  std::vector<double> vdw_radii;
+  for (auto& a : m.molecule.atoms) centres.push_back(a.pos), vdw_radii.push_back(a.radius);
+  // The SES's outside distance is the vdW one wherever a probe fits, so its bottlenecks are measured there.
+  AtomLocator vdw(centres, vdw_radii);
+  AtomLocator surf(centres, surface_radii(m.molecule, fo.surface == MolecularSurface::Sas ? MolecularSurface::Sas
+                                                                                           : MolecularSurface::Vdw, fo.probe));
+  auto find_channels = [&] {
+    const auto tc = Clock::now();
+    stage("channels", 0);
+    m.channels = analyze_channels(r.grid, r.surface, surf, vdw, r.chokes.chokes, options.channels);
+    r.timings_ms["channels"] = ms(tc);
+  };
+  // Only generators need the topology; a surface with handles has some, and one of genus 0 may still have
+  // some (open at the grid's border), so there the topology waits for the chokes.
+  bool topology_ready = false;
+  double topology_ms = 0;  // r.timings_ms is written by this thread only
   tbb::task_group surface_task;
-  if (overlap) surface_task.run(build_surface_structures);
+  if (overlap)
+    surface_task.run([&] {
+      build_surface_structures();
+      if (r.surface_stats.genus > 0) {
+        const auto ts = Clock::now();
+        build_topology(true);
+        topology_ready = true;
+        topology_ms = ms(ts);
+      }
+    });
   try {
     t = Clock::now();
     r.diagram = lower_star_persistence(
@@ -89,6 +127,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
     stage("chokes", 0);
     r.chokes = find_chokes(r.grid, r.diagram, analyze.chokes);
     r.timings_ms["chokes"] = ms(t);
+    if (overlap) find_channels();
   } catch (...) {
     if (overlap) surface_task.wait();
     throw;
@@ -96,29 +135,19 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   if (overlap) surface_task.wait();
   else build_surface_structures();
   r.timings_ms["surface"] = surface_ms;
+  if (topology_ready) r.timings_ms["topology"] = topology_ms;
   check_surface(r);
-  // The loop stage's topology of the surface (its components, then its homology basis: serial passes over all
-  // its faces, 2 s on maltoporin's 17.7M) is prepared beside the channels, which run in parallel and only read
-  // the surface, rather than in the loop stage with every thread waiting on it. Timed with the channels.
-  t = Clock::now();
-  stage("channels", 0);
-  LoopContext context;
-  tbb::task_group topology_task;
-  topology_task.run([&] {
-    prepare_loops(r, std::move(surface_adjacency), std::move(face_label), context);
-    if (context.topology) context.topology->prepare_homology();
-  });
-
-  std::vector<std::array<double, 3>> centres;
-  std::vector<double> vdw_radii;
-  for (auto& a : m.molecule.atoms) centres.push_back(a.pos), vdw_radii.push_back(a.radius);
-  // The SES's outside distance is the vdW one wherever a probe fits, so its bottlenecks are measured there.
-  AtomLocator vdw(centres, vdw_radii);
-  AtomLocator surf(centres, surface_radii(m.molecule, fo.surface == MolecularSurface::Sas ? MolecularSurface::Sas
-                                                                                           : MolecularSurface::Vdw, fo.probe));
-  m.channels = analyze_channels(r.grid, r.surface, surf, vdw, r.chokes.chokes, options.channels);
-  topology_task.wait();
-  r.timings_ms["channels"] = ms(t);
+  bool any_generator = false;
+  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
+  if (topology_ready && !any_generator) context.topology.reset();  // as prepare_loops: none without generators
+  if (!topology_ready) {  // beside the channels, which run in parallel and only read the surface
+    const auto tt = Clock::now();
+    tbb::task_group topology_task;
+    topology_task.run([&] { build_topology(any_generator); });
+    if (!overlap) find_channels();
+    topology_task.wait();
+    r.timings_ms["topology"] = ms(tt);
+  }
 
   t = Clock::now();
   stage("loops", 0);

@@ -33,6 +33,10 @@ struct LoopContext {
   std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
 };
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context);
+// The same with the topology built or not as `with_topology` says, before the chokes are known (r.surface and
+// r.surface_stats are read).
+void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, bool with_topology,
+                   LoopContext& context);
 
 // Never a silently wrong generator: shortening keeps the chosen curve's class, and this safety net checks that
 // it did; a generator loop that became contractible is reported as missing. Loops with `skip[i]` set (when
