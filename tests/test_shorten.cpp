@@ -4,12 +4,15 @@
 
 #include <chrono>
 #include <cmath>
+#include <random>
+#include <unordered_map>
 
 #include "analytic_fields.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/surface.h"
 #include "chokeloops/surface/topology.h"
+#include "loops/flat_int_map.h"
 
 using namespace chokeloops;
 
@@ -195,4 +198,30 @@ TEST(Shorten, RejectsBrokenLoops) {
   auto m = extract_zero_surface(sample_field({24, 24, 24}, analytic::ball(0.3)));
   EXPECT_THROW(shorten_loop(m, std::vector<int>{}), Error);
   EXPECT_THROW(shorten_loop(m, std::vector<int>{0, 5, 77, 300}), Error);
+}
+
+// The shortener's band map against std::unordered_map: clustered and scattered keys, through several growths.
+TEST(Shorten, FlatIntMapAgreesWithUnorderedMap) {
+  detail::FlatIntMap flat;
+  std::unordered_map<int, int> reference;
+  std::mt19937 rng(7);
+  for (int i = 0; i < 20000; ++i) {
+    const int key = i % 3 == 0 ? int(rng() % 1000) : int(rng() % 50000000);
+    const int value = int(rng() % 100) - 50;
+    const bool inserted = reference.emplace(key, value).second;
+    EXPECT_EQ(flat.emplace(key, value), inserted);
+    if (i % 5 == 0) flat[key] += 3, reference[key] += 3;
+  }
+  EXPECT_EQ(flat.size(), reference.size());
+  for (auto& [k, v] : reference) {
+    ASSERT_NE(flat.find(k), nullptr);
+    EXPECT_EQ(*flat.find(k), v);
+    EXPECT_EQ(flat.at(k), v);
+  }
+  for (int k = 50000000; k < 50001000; ++k) EXPECT_FALSE(flat.contains(k));
+  EXPECT_EQ(flat.find(-1), nullptr);
+  EXPECT_THROW(flat.emplace(-1, 0), std::invalid_argument);
+  EXPECT_THROW(flat.at(50000001), std::out_of_range);
+  EXPECT_EQ(flat[123456789], 0);  // inserted as 0, as std::unordered_map's operator[]
+  EXPECT_EQ(flat.size(), reference.size() + 1);
 }

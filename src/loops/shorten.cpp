@@ -8,7 +8,6 @@
 #include <functional>
 #include <limits>
 #include <queue>
-#include <unordered_map>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -39,17 +38,17 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded; all per-vertex
   // data lives on this region so that the cost follows the band, not the mesh.
   const int max_rings = std::max(1, opt.max_rings);
-  std::unordered_map<int, int> rid;
+  detail::FlatIntMap rid;
   std::vector<int> region, ring;
   for (int v : loop)
-    if (rid.emplace(v, int(region.size())).second) region.push_back(v), ring.push_back(0);
+    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
   std::vector<int> around;
   for (size_t i = 0; i < region.size(); ++i) {
     int v = region[i];
     if (ring[i] >= max_rings) continue;
     adj.neighbours(mesh, v, around);
     for (int w : around) {
-      if (rid.emplace(w, int(region.size())).second) region.push_back(w), ring.push_back(ring[i] + 1);
+      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
     }
   }
   std::vector<double> dist;
@@ -57,7 +56,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     dist.assign(region.size(), std::numeric_limits<double>::infinity());
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
-    for (int v : loop) dist[rid[v]] = 0, q.push({0, rid[v]});
+    for (int v : loop) dist[std::size_t(rid.at(v))] = 0, q.push({0, rid.at(v)});
     while (!q.empty()) {
       auto [d, i] = q.top();
       q.pop();
@@ -65,10 +64,10 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       int v = region[i];
       adj.neighbours(mesh, v, around);
       for (int w : around) {
-        auto it = rid.find(w);
-        if (it == rid.end()) continue;
+        const int* wi = rid.find(w);
+        if (!wi) continue;
         double nd = d + dist3(mesh.vertices[v], mesh.vertices[w]);
-        if (nd < dist[it->second]) dist[it->second] = nd, q.push({nd, it->second});
+        if (nd < dist[std::size_t(*wi)]) dist[std::size_t(*wi)] = nd, q.push({nd, *wi});
       }
     }
   }

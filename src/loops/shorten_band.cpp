@@ -14,11 +14,11 @@ namespace chokeloops::shorten_detail {
 
 // ---- Step 1: band --------------------------------------------------------------------------------
 
-bool Shortener::build_band(const std::vector<int>& region, const std::unordered_map<int, int>& rid,
+bool Shortener::build_band(const std::vector<int>& region, const detail::FlatIntMap& rid,
                            const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop) {
   Band B;
-  auto allowed_vertex = [&](int v) { auto it = rid.find(v); return it != rid.end() && allowed[it->second]; };
-  auto near_loop = [&](int v) { auto it = rid.find(v); return it == rid.end() ? 0 : int(near[it->second]); };
+  auto allowed_vertex = [&](int v) { const int* i = rid.find(v); return i && allowed[std::size_t(*i)]; };
+  auto near_loop = [&](int v) { const int* i = rid.find(v); return i ? int(near[std::size_t(*i)]) : 0; };
   // Collect faces around allowed vertices.
   std::vector<int> cand;
   for (size_t i = 0; i < region.size(); ++i)
@@ -36,14 +36,14 @@ bool Shortener::build_band(const std::vector<int>& region, const std::unordered_
       bool touches = near_loop(t[0]) == 2 || near_loop(t[1]) == 2 || near_loop(t[2]) == 2;
       if (!touches) continue;
     }
-    B.in_face.insert(f);
+    B.in_face.emplace(f, 1);
     B.faces.push_back(f);
   }
   if (B.faces.empty()) return false;
   for (int f : B.faces)
     for (int k = 0; k < 3; ++k) {
       int v = mesh.faces[f][k];
-      if (B.local.emplace(v, int(B.global.size())).second) B.global.push_back(v);
+      if (B.local.emplace(v, int(B.global.size()))) B.global.push_back(v);
     }
   band = std::move(B);
   Band& b = band;
@@ -82,15 +82,15 @@ bool Shortener::build_band(const std::vector<int>& region, const std::unordered_
   // Connected (face flood).
   {
     std::vector<int> stack{b.faces[0]};
-    std::unordered_set<int> seen{b.faces[0]};  // band faces only: the band is small, the mesh may be huge
-    seen.reserve(b.faces.size());
+    detail::FlatIntMap seen;  // band faces only: the band is small, the mesh may be huge
+    seen.emplace(b.faces[0], 1);
     size_t reached = 1;
     while (!stack.empty()) {
       int f = stack.back();
       stack.pop_back();
       for (int k = 0; k < 3; ++k) {
         int t = adj.twin[3 * f + k];
-        if (t >= 0 && face_in(t / 3) && seen.insert(t / 3).second) ++reached, stack.push_back(t / 3);
+        if (t >= 0 && face_in(t / 3) && seen.emplace(t / 3, 1)) ++reached, stack.push_back(t / 3);
       }
     }
     if (reached != b.faces.size()) return false;
@@ -109,7 +109,7 @@ bool Shortener::build_band(const std::vector<int>& region, const std::unordered_
     }
     return -1;
   };
-  std::unordered_map<int, int> parent_h;  // face -> half-edge (in the parent face) crossed to reach it
+  detail::FlatIntMap parent_h;  // face -> half-edge (in the parent face) crossed to reach it
   std::queue<int> q;
   for (int f : b.faces)
     if (on_curve(f, true) >= 0) parent_h[f] = -1, q.push(f);
@@ -120,7 +120,7 @@ bool Shortener::build_band(const std::vector<int>& region, const std::unordered_
     if (on_curve(f, false) >= 0) { target = f; break; }
     for (int k = 0; k < 3; ++k) {
       int h = 3 * f + k, t = adj.twin[h];
-      if (t < 0 || !face_in(t / 3) || parent_h.count(t / 3)) continue;
+      if (t < 0 || !face_in(t / 3) || parent_h.contains(t / 3)) continue;
       parent_h[t / 3] = h;
       q.push(t / 3);
     }

@@ -3,12 +3,11 @@
 // holds it (steps 1-2 in shorten_band.cpp, step 3 in shorten_strip.cpp) and the small 3D helpers they use.
 #include <array>
 #include <cmath>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
+#include "flat_int_map.h"
 
 namespace chokeloops::shorten_detail {
 
@@ -27,11 +26,11 @@ inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v bet
 
 // Everything about the annulus band around the loop.
 struct Band {
-  std::unordered_set<int> in_face;  // mesh faces of the band
+  detail::FlatIntMap in_face;       // mesh faces of the band (as keys)
   std::vector<int> faces;
-  std::unordered_map<int, int> local;  // mesh vertex -> band vertex
+  detail::FlatIntMap local;         // mesh vertex -> band vertex
   std::vector<int> global;          // band vertex -> mesh vertex
-  std::unordered_map<int, int> sign;  // cut crossing sign per mesh half-edge
+  detail::FlatIntMap sign;          // cut crossing sign per mesh half-edge
   int winding = 0;                  // of the input loop
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };
@@ -45,14 +44,14 @@ struct Shortener {
 
   int vert(int h) const { return mesh.faces[h / 3][h % 3]; }          // source of half-edge h
   int vert_to(int h) const { return mesh.faces[h / 3][(h % 3 + 1) % 3]; }
-  bool face_in(int f) const { return f >= 0 && band.in_face.count(f); }
+  bool face_in(int f) const { return f >= 0 && band.in_face.contains(f); }
   int local_of(int v) const {
-    auto it = band.local.find(v);
-    return it == band.local.end() ? -1 : it->second;
+    const int* l = band.local.find(v);
+    return l ? *l : -1;
   }
   int hsign(int h) const {
-    auto it = band.sign.find(h);
-    return it == band.sign.end() ? 0 : it->second;
+    const int* s = band.sign.find(h);
+    return s ? *s : 0;
   }
   // Half-edge a->b in any face, or -1 - (half-edge b->a) when only the reverse exists.
   int signed_edge_sign(int a, int b) const {
@@ -67,7 +66,7 @@ struct Shortener {
   // Builds the band of faces allowed by `allowed_vertex` and checks that it is an annulus; sets the cut.
   // `region`: mesh vertices near the loop; `allowed[i]` and `near_loop[i]` (2: on the loop, 1: one ring
   // away) refer to region[i]; `rid` maps mesh vertices to region indices.
-  bool build_band(const std::vector<int>& region, const std::unordered_map<int, int>& rid,
+  bool build_band(const std::vector<int>& region, const detail::FlatIntMap& rid,
                   const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop);
 
   // ---- Step 2: shortest edge loop in the band (shorten_band.cpp) ---------------------------------
