@@ -16,7 +16,7 @@ class FlatIntMap {
   // Inserts key -> value unless the key is there; true when inserted.
   bool emplace(int key, int value) {
     if (key < 0) throw std::invalid_argument("FlatIntMap: negative key");
-    Slot& s = slot_of(key);
+    Slot& s = slots_[index_of(key)];
     if (s.key == key) return false;
     s = Slot{key, value};
     if (++size_ * 2 > slots_.size()) grow();
@@ -24,7 +24,7 @@ class FlatIntMap {
   }
   const int* find(int key) const {
     if (key < 0) return nullptr;
-    const Slot& s = const_cast<FlatIntMap*>(this)->slot_of(key);
+    const Slot& s = slots_[index_of(key)];
     return s.key == key ? &s.value : nullptr;
   }
   bool contains(int key) const { return find(key) != nullptr; }
@@ -36,12 +36,12 @@ class FlatIntMap {
   // The value of key, inserted as 0 when absent.
   int& operator[](int key) {
     if (key < 0) throw std::invalid_argument("FlatIntMap: negative key");
-    Slot* s = &slot_of(key);
+    Slot* s = &slots_[index_of(key)];
     if (s->key != key) {
       *s = Slot{key, 0};
       if (++size_ * 2 > slots_.size()) {
         grow();
-        s = &slot_of(key);
+        s = &slots_[index_of(key)];
       }
     }
     return s->value;
@@ -54,17 +54,18 @@ class FlatIntMap {
   std::vector<Slot> slots_;
   std::size_t size_ = 0;
 
-  Slot& slot_of(int key) {
+  // The slot holding key, or the empty one where it would go.
+  std::size_t index_of(int key) const {
     const std::size_t mask = slots_.size() - 1;
     std::size_t i = (std::uint32_t(key) * 0x9E3779B1u) & mask;
     while (slots_[i].key != key && slots_[i].key != kEmpty) i = (i + 1) & mask;
-    return slots_[i];
+    return i;
   }
   void grow() {
     std::vector<Slot> old(slots_.size() * 2, Slot{kEmpty, 0});
     old.swap(slots_);
     for (const Slot& s : old)
-      if (s.key != kEmpty) slot_of(s.key) = s;
+      if (s.key != kEmpty) slots_[index_of(s.key)] = s;
   }
 };
 

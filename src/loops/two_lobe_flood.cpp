@@ -49,7 +49,7 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   // misses, two thirds of its time); one word makes it one, and spares a scattered read of the grid.
   constexpr std::uint32_t kZone = FloodBox::kZone, kOutside = FloodBox::kOutside, kBorder = FloodBox::kBorder;
   constexpr int kLevelShift = FloodBox::kLevelShift;
-  const double level = grid.voxel_size / 64;
+  const double level = grid.voxel_size / FloodBox::kLevelsPerVoxel;
   const double fs = f[s];
   // Flood levels (a bucket queue), quantised to 1/64 voxel; 0 for everything on the seeds' side of the saddle.
   auto bucket_of = [&](float value) {
@@ -212,8 +212,9 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
 
 FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
                              bool by_distance, FloodBox& box) {
-  // The levels are 1/64 voxel from the saddle's value to the surface's (flood_with); 0 and one past the last.
-  const double levels = std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / 64) + 3;
+  // The levels from the saddle's value to the surface's (flood_with), and 0 and one past the last.
+  const double levels =
+      std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / FloodBox::kLevelsPerVoxel) + 3;
   // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
   static thread_local std::vector<std::uint16_t> cell16;
   static thread_local std::vector<std::uint32_t> cell32;

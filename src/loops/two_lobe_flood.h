@@ -20,6 +20,7 @@ enum class FloodOutcome { Flooded, Grow, Shrink };  // Grow: a lobe is not in th
 struct FloodBox {
   static constexpr std::uint32_t kZone = 3, kOutside = 3, kBorder = 4;
   static constexpr int kLevelShift = 3;
+  static constexpr int kLevelsPerVoxel = 64;  // the flood's levels are this fine (a bucket queue)
   std::array<int, 3> lo{}, hi{}, n{};  // grid coordinates of the box (inclusive) and its size
   Id base = 0;                         // grid id of local (0, 0, 0)
   Id gy = 0, gz = 0;                   // grid strides

@@ -1,5 +1,6 @@
 #include "chokeloops/analyze.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -226,10 +227,12 @@ void check_surface(AnalyzeResult& r) {
     r.warnings.push_back("the surface touches the border of the grid and is not closed; enlarge --margin");
 }
 
+bool any_generator(const AnalyzeResult& r) {
+  return std::any_of(r.chokes.chokes.begin(), r.chokes.chokes.end(), [](const Choke& c) { return c.kind == Kind::Generator; });
+}
+
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context) {
-  bool any_generator = false;
-  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
-  prepare_loops(r, std::move(adjacency), std::move(face_label), any_generator, context);
+  prepare_loops(r, std::move(adjacency), std::move(face_label), any_generator(r), context);
 }
 
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, bool with_topology,

@@ -137,13 +137,12 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
   r.timings_ms["surface"] = surface_ms;
   if (topology_ready) r.timings_ms["topology"] = topology_ms;
   check_surface(r);
-  bool any_generator = false;
-  for (auto& c : r.chokes.chokes) any_generator |= c.kind == Kind::Generator;
-  if (topology_ready && !any_generator) context.topology.reset();  // as prepare_loops: none without generators
+  const bool with_topology = any_generator(r);
+  if (topology_ready && !with_topology) context.topology.reset();  // as prepare_loops: none without generators
   if (!topology_ready) {  // beside the channels, which run in parallel and only read the surface
     const auto tt = Clock::now();
     tbb::task_group topology_task;
-    topology_task.run([&] { build_topology(any_generator); });
+    topology_task.run([&] { build_topology(with_topology); });
     if (!overlap) find_channels();
     topology_task.wait();
     r.timings_ms["topology"] = ms(tt);

@@ -32,6 +32,8 @@ struct LoopContext {
   MeshAdjacency adjacency;
   std::unique_ptr<SurfaceTopology> topology;  // null when no choke is a generator
 };
+// Whether some choke is a generator: only then does the loop stage need the surface's topology.
+bool any_generator(const AnalyzeResult& r);
 void prepare_loops(const AnalyzeResult& r, MeshAdjacency adjacency, std::vector<int> face_label, LoopContext& context);
 // The same with the topology built or not as `with_topology` says, before the chokes are known (r.surface and
 // r.surface_stats are read).

@@ -158,13 +158,14 @@ void Engine::classify() {
         Id v = cx_.vertex(i, j, k);
         std::uint16_t lower = 0, outside = 0;
         int lo = -1, hi = -1;
-        if (!border_row && i > 0 && i < nx - 1) {
+        const bool interior = !border_row && i > 0 && i < nx - 1;
+        if (interior) {
           lower = std::uint16_t(row_scratch.lower[std::size_t(i - 1)]);
           lo = row_scratch.lo[std::size_t(i - 1)];
           hi = row_scratch.hi[std::size_t(i - 1)];
         }
         // a border vertex, or a lower neighbour as high as +inf (where the row's pass finds no lowest)
-        if (border_row || i == 0 || i == nx - 1 || (lower && lo < 0)) {
+        if (!interior || (lower && lo < 0)) {
           lower = 0, lo = -1, hi = -1;
           for (int n = 0; n < 14; ++n) {
             if (!cx_.neighbor_inside({i, j, k}, n)) { outside |= std::uint16_t(1u << n); continue; }
