@@ -24,8 +24,8 @@ using namespace chokeloops;
 
 namespace {
 
-const char* kStages[] = {"read", "levelset", "persistence", "surface", "channels", "loops", "check", "total"};
-const char* kMeasures[] = {"read", "levelset", "persistence", "surface", "channels", "loops", "check", "total", "cpu"};
+const char* kStages[] = {"read", "levelset", "persistence", "chokes", "surface", "topology", "channels", "loops", "check", "total"};
+const char* kMeasures[] = {"read", "levelset", "persistence", "chokes", "surface", "topology", "channels", "loops", "check", "total", "cpu"};
 
 // Copies of a structure on a lattice, written as mmCIF-free PDB (serials wrap; chains renamed per copy).
 std::string make_lattice(const std::string& src, int copies, const std::string& out) {

@@ -1,15 +1,18 @@
 #pragma once
-// Front-ends call restart_with_huge_pages(argv) first in main(): the process restarts itself once with
-// glibc's malloc backing its large blocks by transparent huge pages.
+// Front-ends call restart_with_huge_pages(argv) first in main(): with CHOKELOOPS_HUGE_PAGES=1 the process
+// restarts itself once with glibc's malloc backing its large blocks by transparent huge pages.
 //
-// Why: the engine allocates its grids, complexes and meshes once and touches every page of them. On the
-// virtual machines this runs on, a 4 KiB page fault costs ~10 µs, and faults were 40-50% of a run
-// (gramicidin at 0.25 Å: 948 ms -> 477 ms median end to end, maltoporin 44 s -> 26 s). With the kernel's
-// THP mode "madvise" (Debian's default), memory is huge-page backed only where the program asks with
+// Opt-in, because on the virtual machines this is measured on a fresh 2 MiB page is the dearest memory there
+// is: it costs its first touch 0.3-0.6 GB/s (maltoporin's 1.8 GB: 4.6-4.7 s of system time) unless another
+// process has just freed huge pages, against 1.6-2.2 GB/s for 4 KiB pages (1.0-1.2 s), and nothing came back
+// in user time. Maltoporin at 0.25 Å after 8 s idle, alternated, 2026-12-03: 11.4/11.9/11.5 s with huge pages,
+// 8.3/8.5/7.5 s without; back to back (bench_molecules, medians of 3) 9.0/9.1 against 9.0/7.9 s; gramicidin
+// and the rough persistence at 256^3 the same either way. (On an earlier state of the same machine, when a
+// 4 KiB fault cost ~10 µs, they halved maltoporin's and gramicidin's times and were the default.) With THP in
+// "madvise" mode (Debian's default) memory is huge-page backed only where the program asks with
 // madvise(MADV_HUGEPAGE), which glibc does for malloc when its tunable glibc.malloc.hugetlb=1 is set; glibc
 // reads tunables only at start-up, hence the restart. Nothing happens when the tunable is already set, when
-// THP is "always" or "never", under valgrind, when CHOKELOOPS_HUGE_PAGES=0, or when the restart fails (the
-// run goes on).
+// THP is "always" or "never", under valgrind, or when the restart fails (the run goes on).
 namespace chokeloops {
 
 void restart_with_huge_pages(char** argv);

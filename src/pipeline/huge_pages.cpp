@@ -12,7 +12,7 @@ namespace chokeloops {
 
 void restart_with_huge_pages(char** argv) {
   const char* opt = std::getenv("CHOKELOOPS_HUGE_PAGES");
-  if (opt && std::string(opt) == "0") return;
+  if (!opt || std::string(opt) != "1") return;  // opt-in: see huge_pages.h
   // Under valgrind the restarted process would run outside it (valgrind does not follow exec by default).
   const char* preload = std::getenv("LD_PRELOAD");
   if (preload && std::strstr(preload, "vgpreload")) return;
