@@ -3,16 +3,17 @@
 // restarts itself once with glibc's malloc backing its large blocks by transparent huge pages.
 //
 // Opt-in, because on the virtual machines this is measured on a fresh 2 MiB page is the dearest memory there
-// is: it costs its first touch 0.3-0.6 GB/s (maltoporin's 1.8 GB: 4.6-4.7 s of system time) unless another
-// process has just freed huge pages, against 1.6-2.2 GB/s for 4 KiB pages (1.0-1.2 s), and nothing came back
-// in user time. Maltoporin at 0.25 Å after 8 s idle, alternated, 2026-12-03: 11.4/11.9/11.5 s with huge pages,
-// 8.3/8.5/7.5 s without; back to back (bench_molecules, medians of 3) 9.0/9.1 against 9.0/7.9 s; gramicidin
-// and the rough persistence at 256^3 the same either way. (On an earlier state of the same machine, when a
-// 4 KiB fault cost ~10 µs, they halved maltoporin's and gramicidin's times and were the default.) With THP in
-// "madvise" mode (Debian's default) memory is huge-page backed only where the program asks with
-// madvise(MADV_HUGEPAGE), which glibc does for malloc when its tunable glibc.malloc.hugetlb=1 is set; glibc
-// reads tunables only at start-up, hence the restart. Nothing happens when the tunable is already set, when
-// THP is "always" or "never", under valgrind, or when the restart fails (the run goes on).
+// is: after the machine idled it costs its first touch 0.3-0.5 GB/s (maltoporin's 1.8 GB: 4.6-4.7 s of
+// system time), cheap only right after another process freed huge pages, against 1.4-2.1 GB/s for 4 KiB
+// pages whatever ran before (1.0-1.2 s), and nothing came back in user time. Maltoporin at 0.25 Å after 8 s
+// idle, alternated, 2026-12-03: 11.4/11.9/11.5 s with huge pages, 8.3/8.5/7.5 s without; back to back
+// (bench_molecules, medians of 3) 9.0/9.1 against 9.0/7.9 s; gramicidin and the rough persistence at 256^3
+// the same either way. (On an earlier state of the same machine, when a 4 KiB fault cost ~10 µs, they halved
+// maltoporin's and gramicidin's times and were the default.) With THP in "madvise" mode (Debian's default)
+// memory is huge-page backed only where the program asks with madvise(MADV_HUGEPAGE), which glibc does for
+// malloc when its tunable glibc.malloc.hugetlb=1 is set; glibc reads tunables only at start-up, hence the
+// restart. Nothing happens when the tunable is already set, when THP is "always" or "never", under valgrind,
+// or when the restart fails (the run goes on).
 namespace chokeloops {
 
 void restart_with_huge_pages(char** argv);
