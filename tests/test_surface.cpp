@@ -4,8 +4,10 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -391,4 +393,45 @@ TEST(Surface, StatisticsOfBrokenMeshesCountEachDefect) {
     EXPECT_EQ(ends, 2 * surface_stats(*m, A).edges);
   }
   EXPECT_GT(torus.vertices.size(), 1000u);
+}
+
+// The adjacency's nearest-vertex search visits its cells ring by ring and stops early: it must answer as a
+// scan of every vertex does (nearest within the radius among the accepted ones, the lowest index on a tie),
+// for points on, near and far from the surface, outside its box, and radii from a fraction of a cell to the
+// whole box.
+TEST(Surface, NearestVertexAgreesWithAScanOfEveryVertex) {
+  const SurfaceMesh mesh = extract_zero_surface(cube_field(40, analytic::torus(0.3, 0.12)));
+  const MeshAdjacency adj = build_adjacency(mesh);
+  ASSERT_GT(adj.cell_size, 0);
+  std::uint64_t state = 12345;
+  auto uniform = [&] {  // deterministic, in [0, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(1ull << 53);
+  };
+  const double radii[] = {0.3 * adj.cell_size, 1.5 * adj.cell_size, 6 * adj.cell_size, 10.0};
+  int found = 0, checked = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::array<double, 3> p;
+    if (trial % 3 == 0) {  // on a vertex, nudged
+      p = mesh.vertices[std::size_t(trial * 7919) % mesh.vertices.size()];
+      for (double& x : p) x += (uniform() - 0.5) * adj.cell_size;
+    } else {
+      for (double& x : p) x = -0.2 + 1.4 * uniform();  // beyond the surface's box too
+    }
+    const double radius = radii[trial % 4];
+    const int modulus = trial % 2 ? 3 : 1;  // every third vertex refused, or none
+    auto accept = [&](int v) { return v % modulus != 0 || modulus == 1; };
+    int expected = -1;
+    double best = radius * radius;
+    for (int v = 0; v < int(mesh.vertices.size()); ++v) {
+      const auto& q = mesh.vertices[std::size_t(v)];
+      const double d2 = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
+      if (accept(v) && (d2 < best || (d2 == best && expected >= 0 && v < expected))) best = d2, expected = v;
+    }
+    EXPECT_EQ(adj.nearest_vertex(mesh, p, radius, accept), expected) << "trial " << trial;
+    found += expected >= 0;
+    ++checked;
+  }
+  EXPECT_GT(found, checked / 4);       // the test sees real answers,
+  EXPECT_LT(found, checked);           // and points with none in reach
 }

@@ -4,6 +4,8 @@
 // half-edge in the neighbouring face, or -1 on a boundary (or at a non-manifold edge).
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdlib>
 #include <vector>
 
 #include "chokeloops/surface/surface.h"
@@ -41,28 +43,51 @@ struct MeshAdjacency {
 template <class Accept>
 int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius, Accept&& accept) const {
   if (cell_size <= 0) return -1;
-  std::array<long, 3> lo, hi;
+  std::array<long, 3> lo, hi, c;
   for (int a = 0; a < 3; ++a) {
     lo[a] = std::max(0L, long((p[a] - radius - cell_origin[a]) / cell_size));
     hi[a] = std::min(cell_dims[a] - 1, long((p[a] + radius - cell_origin[a]) / cell_size));
     if (p[a] + radius < cell_origin[a] || hi[a] < lo[a]) return -1;
+    c[a] = std::clamp(long(std::floor((p[a] - cell_origin[a]) / cell_size)), lo[a], hi[a]);
   }
+  // The nearest accepted vertex (the lowest index on a tie) among the cells within `radius`, visited in
+  // rings of cells around p's own: once the best is nearer than anything beyond the rings done, the rest
+  // cannot change it. Callers pass a radius of several cells for the rare far point, and the nearest vertex
+  // is nearly always in the first ring.
   int best = -1;
   double best_d2 = radius * radius;
-  for (long z = lo[2]; z <= hi[2]; ++z)
-    for (long y = lo[1]; y <= hi[1]; ++y)
-      for (long x = lo[0]; x <= hi[0]; ++x) {
-        const long c = x + cell_dims[0] * (y + cell_dims[1] * z);
-        for (int i = cell_start[c]; i < cell_start[c + 1]; ++i) {
-          const int v = cell_vertex[i];
-          const auto& q = m.vertices[v];
-          const double d2 = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
-          if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && v < best)) {
-            if (!accept(v)) continue;
-            best_d2 = d2, best = v;
-          }
-        }
+  auto visit = [&](long x, long y, long z) {
+    const long cell = x + cell_dims[0] * (y + cell_dims[1] * z);
+    for (int i = cell_start[std::size_t(cell)]; i < cell_start[std::size_t(cell) + 1]; ++i) {
+      const int v = cell_vertex[std::size_t(i)];
+      const auto& q = m.vertices[std::size_t(v)];
+      const double d2 = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
+      if (d2 < best_d2 || (d2 == best_d2 && best >= 0 && v < best)) {
+        if (!accept(v)) continue;
+        best_d2 = d2, best = v;
       }
+    }
+  };
+  for (long k = 0;; ++k) {
+    for (long z = std::max(lo[2], c[2] - k); z <= std::min(hi[2], c[2] + k); ++z)
+      for (long y = std::max(lo[1], c[1] - k); y <= std::min(hi[1], c[1] + k); ++y) {
+        const bool shell = std::abs(z - c[2]) == k || std::abs(y - c[1]) == k;
+        for (long x = std::max(lo[0], c[0] - k); x <= std::min(hi[0], c[0] + k); ++x)
+          if (shell || std::abs(x - c[0]) == k) visit(x, y, z);
+          else x = c[0] + k - 1;  // inside the shell: jump to its far wall
+      }
+    // The distance from p to the cells not visited yet (none left: done), less a hair for a vertex that
+    // rounding put in the next cell.
+    bool left = false;
+    double gap = radius;
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] - k > lo[a]) left = true, gap = std::min(gap, p[a] - (cell_origin[a] + double(c[a] - k) * cell_size));
+      if (c[a] + k < hi[a]) left = true, gap = std::min(gap, cell_origin[a] + double(c[a] + k + 1) * cell_size - p[a]);
+    }
+    if (!left) break;
+    gap -= 1e-6 * cell_size;
+    if (gap > 0 && best >= 0 && best_d2 < gap * gap) break;
+  }
   return best;
 }
 
