@@ -16,6 +16,9 @@ struct Site {
 // Vertices not `known` get sign * distance (per-axis spacing) to the point of their nearest site.
 void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
                                    const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site = nullptr);
+// Each vertex's nearest site by the same transform (-1 where there is none), the grid left as it is: for a
+// caller that computes the values itself.
+std::vector<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites);
 
 // The sites of a grid, in vertex order: site_at(i, j, k, v, site) fills `site` and returns true for each
 // vertex (i, j, k) of linear index v that is one. Slices run in parallel; the order does not depend on it.

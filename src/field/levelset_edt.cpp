@@ -70,21 +70,21 @@ void envelope_line(int n, float* f, std::int32_t* id, std::vector<int>& v, std::
 
 }  // namespace
 
-// grid.values: signed values (only the sign is used where not known); `known[i]` = keep as is
-// (empty: recompute every vertex); sites: see above.
-// nearest_site (optional): receives each vertex's chosen site (-1 where none).
-void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
-                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site) {
+namespace {
+
+// Each vertex's nearest site (F, -1 where none) and the squared distance to its surface point in units of
+// voxel_size (D).
+void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, std::vector<float>& D,
+                   std::vector<std::int32_t>& F) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const std::size_t N = std::size_t(grid.vertex_count());
-  if (sites.empty()) return;
   // Squared spacing per axis in units of voxel_size (anisotropic grids; exactly 1 on isotropic ones).
   const double wx = (grid.h(0) / grid.voxel_size) * (grid.h(0) / grid.voxel_size);
   const double wy = (grid.h(1) / grid.voxel_size) * (grid.h(1) / grid.voxel_size);
   const double wz = (grid.h(2) / grid.voxel_size) * (grid.h(2) / grid.voxel_size);
   const float fwx = float(wx), fwy = float(wy), fwz = float(wz);
-  std::vector<float> D(N, kInf);
-  std::vector<std::int32_t> F(N, -1);
+  D.assign(N, kInf);
+  F.assign(N, -1);
   for (std::size_t s = 0; s < sites.size(); ++s) {
     D[std::size_t(sites[s].vertex)] = 0.f;
     F[std::size_t(sites[s].vertex)] = std::int32_t(s);
@@ -223,6 +223,28 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
     for (int axis = 0; axis < 3; ++axis)
       if (round > 0 || axis < 2) relax_axis(axis);
 
+}
+
+}  // namespace
+
+std::vector<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites) {
+  std::vector<float> D;
+  std::vector<std::int32_t> F;
+  if (sites.empty()) return std::vector<std::int32_t>(std::size_t(grid.vertex_count()), -1);
+  nearest_sites(grid, sites, D, F);
+  return F;
+}
+
+// grid.values: signed values (only the sign is used where not known); `known[i]` = keep as is
+// (empty: recompute every vertex); sites: see above.
+// nearest_site (optional): receives each vertex's chosen site (-1 where none).
+void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
+                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site) {
+  if (sites.empty()) return;
+  const std::size_t N = std::size_t(grid.vertex_count());
+  std::vector<float> D;
+  std::vector<std::int32_t> F;
+  nearest_sites(grid, sites, D, F);
   const double h = grid.voxel_size;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t idx = r.begin(); idx != r.end(); ++idx) {

@@ -161,14 +161,8 @@ void rasterise(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
 // Vertices farther than `cut` from every sphere: the distance to the sphere of the nearest centre, found by
 // the exact feature transform with the atom centres as sites.
 void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const std::vector<double>& R) {
-  const std::size_t N = g.values.size();
-  std::vector<std::uint8_t> known(N);
-  bool any = false;
-  for (std::size_t v = 0; v < N; ++v) {
-    known[v] = std::isfinite(g.values[v]);
-    any |= !known[v];
-  }
-  if (!any) return;
+  // The vertices left to fill are those the rasterisation did not reach (+inf).
+  if (std::all_of(g.values.begin(), g.values.end(), [](float x) { return std::isfinite(x); })) return;
   const double h = g.voxel_size;
   // One site per vertex, the first atom there (two centres this close are one, seen from far away): the
   // atoms sorted by their vertex rather than a grid-sized mark array.
@@ -199,16 +193,13 @@ void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
     sites.push_back({vertex_of[i], {point_of[i][0], point_of[i][1], point_of[i][2]}});
     site_atom.push_back(int(i));
   }
-  // The transform writes its distance into the unknown vertices of g (+inf, so positive), which are
-  // overwritten below with the distance to the nearest centre's sphere: no second grid is needed.
-  std::vector<std::int32_t> nearest;
-  detail::complete_by_feature_transform(g, known, sites, &nearest);
+  const std::vector<std::int32_t> nearest = detail::nearest_sites(g, sites);
   tbb::parallel_for(tbb::blocked_range<int>(0, g.dims[2]), [&](const tbb::blocked_range<int>& r) {
     for (int k = r.begin(); k != r.end(); ++k)
       for (int j = 0; j < g.dims[1]; ++j)
         for (int i = 0; i < g.dims[0]; ++i) {
           const std::size_t v = std::size_t(g.index(i, j, k));
-          if (known[v] || nearest[v] < 0) continue;
+          if (std::isfinite(g.values[v]) || nearest[v] < 0) continue;
           const int a = site_atom[std::size_t(nearest[v])];
           const auto x = g.world({i, j, k});
           const double d = std::sqrt((x[0] - c[a][0]) * (x[0] - c[a][0]) + (x[1] - c[a][1]) * (x[1] - c[a][1]) +
