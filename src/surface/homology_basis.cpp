@@ -15,8 +15,7 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
   // Fresh pages are much of this constructor's cost on a 17.7M-face surface: one byte a half-edge, and the
   // DFS numbers double as the cotree's "reached" marks (-2 once a face is pushed).
   part_.assign(std::size_t(3) * F, kUnset);
-  first_.assign(F, -1);
-  last_.resize(F);
+  interval_.assign(F, {-1, 0});
   auto in_basis = [&](int f) {
     const int c = face_label[f];
     return c >= 0 && closed[c];
@@ -41,24 +40,24 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
   std::vector<int> stack;
   std::int32_t counter = 0;
   for (int root = 0; root < F; ++root) {
-    if (first_[root] != -1 || !in_basis(root)) continue;
-    first_[root] = kReached;
+    if (interval_[root][0] != -1 || !in_basis(root)) continue;
+    interval_[root][0] = kReached;
     stack.assign(1, root);
     while (!stack.empty()) {
       const int f = stack.back();
       stack.pop_back();
       if (f < 0) {
-        last_[~f] = counter - 1;
+        interval_[~f][1] = counter - 1;
         continue;
       }
-      first_[f] = counter++;
+      interval_[f][0] = counter++;
       stack.push_back(~f);
       for (int k = 0; k < 3; ++k) {
         const int h = 3 * f + k;
         if (part_[h] != kUnset) continue;
         const int t = adj.twin[h], g = MeshAdjacency::face(t);
-        if (first_[g] != -1) continue;
-        first_[g] = kReached;
+        if (interval_[g][0] != -1) continue;
+        interval_[g][0] = kReached;
         part_[h] = kCotreeBelowTwin;
         part_[t] = kCotreeBelowHere;
         stack.push_back(g);
@@ -80,7 +79,7 @@ HomologyBasis::HomologyBasis(const SurfaceMesh& mesh, const MeshAdjacency& adj, 
       const int t = adj.twin[h];
       part_[h] = part_[t] = kLeftover;
       leftover_edge_.push_back(h);
-      leftover_faces_.push_back({first_[MeshAdjacency::face(h)], first_[MeshAdjacency::face(t)]});
+      leftover_faces_.push_back({interval_[MeshAdjacency::face(h)][0], interval_[MeshAdjacency::face(t)][0]});
     }
   }
 }
@@ -124,8 +123,8 @@ bool HomologyBasis::null_homologous(const std::vector<int>& loop) const {
       continue;
     }
     const int f = MeshAdjacency::face(part_[e] == kCotreeBelowHere ? e : adj_.twin[e]);  // the face below
-    ends.push_back(first_[f]);
-    ends.push_back(last_[f] + 1);
+    ends.push_back(interval_[f][0]);
+    ends.push_back(interval_[f][1] + 1);
   }
   if (!ends.empty()) {
     std::sort(ends.begin(), ends.end());

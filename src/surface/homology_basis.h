@@ -37,7 +37,9 @@ class HomologyBasis {
   const MeshAdjacency& adj_;
   const std::vector<int>& face_label_;
   std::vector<std::uint8_t> part_;
-  std::vector<std::int32_t> first_, last_;    // per face: its subtree of C is [first_, last_] in DFS order
+  // Per face: its subtree of C is [first, last] in DFS order. One pair a face, not two arrays: the DFS reads a
+  // neighbour's first and later writes the face's last, and one cache line serves both.
+  std::vector<std::array<std::int32_t, 2>> interval_;
   std::vector<std::int32_t> leftover_start_;  // per component: its leftover edges' indices (components + 1)
   std::vector<std::int32_t> leftover_edge_;   // per leftover edge: its lower half-edge, rising in each component
   std::vector<std::array<std::int32_t, 2>> leftover_faces_;  // per leftover edge: DFS numbers of its faces
