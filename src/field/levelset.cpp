@@ -168,7 +168,7 @@ void check_memory(const openvdb::CoordBBox& box, const LevelSetOptions& o, doubl
 // ((x - p) . (s - p) < 0). Where that is not clear-cut (the two directions more than 60 degrees from
 // parallel or antiparallel, e.g. around the rim of a hole), w is evaluated at x itself.
 // Returns how many vertices needed their own evaluation.
-std::size_t sign_by_winding_number(ScalarGrid& g, const std::vector<std::int32_t>& nearest,
+std::size_t sign_by_winding_number(ScalarGrid& g, const detail::GridArray<std::int32_t>& nearest,
                                    const std::vector<detail::Site>& sites, const TriangleMesh& mesh,
                                    const openvdb::Coord& b0) {
   const WindingNumber wn(mesh);
@@ -385,7 +385,7 @@ LevelSetResult mesh_to_levelset(const TriangleMesh& mesh, const LevelSetOptions&
     stage.done("sites");
     // OpenVDB's sign leaks through holes that repair left open: those take the winding number's
     const bool open = res.report.boundary_edges_remaining > 0;
-    std::vector<std::int32_t> nearest;
+    detail::GridArray<std::int32_t> nearest;
     detail::complete_by_feature_transform(g, known, sites, open ? &nearest : nullptr);
     stage.done("far field (feature transform)");
     if (open && !sites.empty()) {

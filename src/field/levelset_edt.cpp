@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -74,8 +75,8 @@ namespace {
 
 // Each vertex's nearest site (F, -1 where none) and the squared distance to its surface point in units of
 // voxel_size (D).
-void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, std::vector<float>& D,
-                   std::vector<std::int32_t>& F) {
+void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, GridArray<float>& D,
+                   GridArray<std::int32_t>& F) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const std::size_t N = std::size_t(grid.vertex_count());
   // Squared spacing per axis in units of voxel_size (anisotropic grids; exactly 1 on isotropic ones).
@@ -83,8 +84,8 @@ void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, std::
   const double wy = (grid.h(1) / grid.voxel_size) * (grid.h(1) / grid.voxel_size);
   const double wz = (grid.h(2) / grid.voxel_size) * (grid.h(2) / grid.voxel_size);
   const float fwx = float(wx), fwy = float(wy), fwz = float(wz);
-  D.assign(N, kInf);
-  F.assign(N, -1);
+  D = GridArray<float>(N, kInf);
+  F = GridArray<std::int32_t>(N, -1);
   for (std::size_t s = 0; s < sites.size(); ++s) {
     D[std::size_t(sites[s].vertex)] = 0.f;
     F[std::size_t(sites[s].vertex)] = std::int32_t(s);
@@ -227,10 +228,10 @@ void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, std::
 
 }  // namespace
 
-std::vector<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites) {
-  std::vector<float> D;
-  std::vector<std::int32_t> F;
-  if (sites.empty()) return std::vector<std::int32_t>(std::size_t(grid.vertex_count()), -1);
+GridArray<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites) {
+  if (sites.empty()) return GridArray<std::int32_t>(std::size_t(grid.vertex_count()), -1);
+  GridArray<float> D;
+  GridArray<std::int32_t> F;
   nearest_sites(grid, sites, D, F);
   return F;
 }
@@ -239,11 +240,11 @@ std::vector<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vecto
 // (empty: recompute every vertex); sites: see above.
 // nearest_site (optional): receives each vertex's chosen site (-1 where none).
 void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint8_t>& known,
-                                   const std::vector<Site>& sites, std::vector<std::int32_t>* nearest_site) {
+                                   const std::vector<Site>& sites, GridArray<std::int32_t>* nearest_site) {
   if (sites.empty()) return;
   const std::size_t N = std::size_t(grid.vertex_count());
-  std::vector<float> D;
-  std::vector<std::int32_t> F;
+  GridArray<float> D;
+  GridArray<std::int32_t> F;
   nearest_sites(grid, sites, D, F);
   const double h = grid.voxel_size;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -254,7 +255,7 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
       grid.values[idx] = float(grid.values[idx] < 0 ? -d : d);
     }
   });
-  if (nearest_site) nearest_site->swap(F);
+  if (nearest_site) *nearest_site = std::move(F);
 }
 
 }  // namespace chokeloops::detail

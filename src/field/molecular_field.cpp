@@ -193,7 +193,7 @@ void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
     sites.push_back({vertex_of[i], {point_of[i][0], point_of[i][1], point_of[i][2]}});
     site_atom.push_back(int(i));
   }
-  const std::vector<std::int32_t> nearest = detail::nearest_sites(g, sites);
+  const detail::GridArray<std::int32_t> nearest = detail::nearest_sites(g, sites);
   tbb::parallel_for(tbb::blocked_range<int>(0, g.dims[2]), [&](const tbb::blocked_range<int>& r) {
     for (int k = r.begin(); k != r.end(); ++k)
       for (int j = 0; j < g.dims[1]; ++j)
