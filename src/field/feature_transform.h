@@ -3,35 +3,13 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <algorithm>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "chokeloops/grid.h"
+#include "common/grid_array.h"
 
 namespace chokeloops::detail {
-
-// A grid-sized array filled in parallel, so that its pages are first touched by the threads that fill it: a
-// std::vector zeroes them all on one thread first (maltoporin's 53M voxels: 0.2-0.3 s a grid-sized array,
-// the other core idle).
-template <class T>
-class GridArray {
- public:
-  GridArray() = default;
-  GridArray(std::size_t n, T value) : data_(new T[n]), size_(n) {  // trivial T: new T[n] leaves it untouched
-    T* d = data_.get();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, std::size_t(1) << 16),
-                      [&](const tbb::blocked_range<std::size_t>& r) { std::fill(d + r.begin(), d + r.end(), value); });
-  }
-  T& operator[](std::size_t i) { return data_[i]; }
-  const T& operator[](std::size_t i) const { return data_[i]; }
-  std::size_t size() const { return size_; }
-
- private:
-  std::unique_ptr<T[]> data_;
-  std::size_t size_ = 0;
-};
 
 struct Site {
   std::int64_t vertex;  // linear index of the site vertex

@@ -1,12 +1,13 @@
 #include "chokeloops/surface/surface.h"
 
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#include "common/grid_array.h"
 
 namespace chokeloops {
 
@@ -104,13 +105,13 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
   const std::size_t N = size_t(grid.vertex_count());
   // One byte per vertex, 1 inside: eight vertices of a row are then compared in one 64-bit word, and most
   // of a molecular or medical grid is far from the surface (maltoporin at 0.25 A: 53M vertices, 8.8M crossings).
-  std::vector<std::uint8_t> inside(N);
+  detail::GridArray<std::uint8_t> inside(N);  // every vertex written below
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) inside[v] = f[v] <= 0.f;
   });
   const std::uint8_t* in = inside.data();
-  std::vector<std::uint8_t> cross(N, 0);
-  std::vector<std::uint32_t> base(N);
+  detail::GridArray<std::uint8_t> cross(N, 0);
+  detail::GridArray<std::uint32_t> base(N);  // written and read only where a vertex has a crossing
   std::vector<std::int64_t> layer_vertices(nz + 1, 0), layer_faces(nz + 1, 0);
 
   auto cube_mask = [&](Id v) {
