@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <string>
 #include <sstream>
 
 #include "analytic_fields.h"
@@ -163,3 +165,30 @@ TEST(PersistenceMeaning, ClosedHollowBallHasOneSealedCavity) {
 }
 
 }  // namespace
+
+// A grid value that is not finite is refused with the index of the first one, whichever block of the
+// parallel check meets one first.
+TEST(PersistenceMeaning, NamesTheFirstValueThatIsNotFinite) {
+  ScalarGrid g;
+  g.dims = {100, 100, 100};
+  g.voxel_size = 1;
+  g.values.assign(1000000, 1.0f);
+  g.values[700001] = std::numeric_limits<float>::infinity();
+  g.values[300007] = std::nanf("");
+  g.values[999999] = -std::numeric_limits<float>::infinity();
+  auto message = [&] {
+    try {
+      lower_star_persistence(g);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message().find("vertex 300007 "), std::string::npos) << message();
+  g.values[300007] = 0.5f;
+  EXPECT_NE(message().find("vertex 700001 "), std::string::npos) << message();
+  g.values[700001] = 0.5f;
+  EXPECT_NE(message().find("vertex 999999 "), std::string::npos) << message();
+  g.values[999999] = 0.5f;
+  EXPECT_EQ(message(), "no error");
+}

@@ -111,7 +111,6 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
   });
   const std::uint8_t* in = inside.data();
   detail::GridArray<std::uint8_t> cross(N, 0);
-  detail::GridArray<std::uint32_t> base(N);  // written and read only where a vertex has a crossing
   std::vector<std::int64_t> layer_vertices(nz + 1, 0), layer_faces(nz + 1, 0);
 
   auto cube_mask = [&](Id v) {
@@ -186,10 +185,14 @@ SurfaceMesh extract_zero_surface(const ScalarGrid& grid) {
   if (layer_vertices[nz] >= (std::int64_t(1) << 31) || layer_faces[nz] >= (std::int64_t(1) << 31))
     throw Error("surface has more than 2^31 vertices or faces; use a coarser resolution", 3);
 
+  // The mesh's arrays are zeroed on one thread (std::vector): allocated before the numbering, they take what
+  // the stage before freed (in the molecule pipeline, the far field's arrays) rather than fresh pages, which
+  // cost this machine ~2 GB/s to fault in. The numbering is touched only where written, in parallel.
   SurfaceMesh mesh;
   mesh.vertices.resize(size_t(layer_vertices[nz]));
   mesh.vertex_edge.resize(size_t(layer_vertices[nz]));
   mesh.faces.resize(size_t(layer_faces[nz]));
+  detail::GridArray<std::uint32_t> base(N);  // written and read only where a vertex has a crossing
   const double hx = grid.h(0), hy = grid.h(1), hz = grid.h(2);
   const double eps = 1e-3;
 
