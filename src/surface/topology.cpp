@@ -4,6 +4,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Path_on_surface.h>
 #include <CGAL/Surface_mesh.h>
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -60,23 +63,44 @@ struct SurfaceTopology::Impl {
       : mesh(m), own(a ? MeshAdjacency{} : build_adjacency(m)), adj(a ? *a : own) {
     if (labels) face_label = std::move(*labels), components = n_components;
     else components = face_components(m, face_label);
-    vertex_label.assign(m.vertices.size(), -1);
-    for (size_t f = 0; f < m.faces.size(); ++f)
-      for (int k = 0; k < 3; ++k) vertex_label[m.faces[f][k]] = face_label[f];
-    euler.assign(size_t(std::max(components, 0)), 0);
-    closed.assign(size_t(std::max(components, 0)), 1);
-    for (size_t v = 0; v < m.vertices.size(); ++v)
-      if (vertex_label[v] >= 0) ++euler[vertex_label[v]];
-    std::vector<std::int64_t> edges(euler.size(), 0), faces(euler.size(), 0);
-    for (size_t f = 0; f < m.faces.size(); ++f) {
-      ++faces[face_label[f]];
-      for (int k = 0; k < 3; ++k) {
-        int h = int(3 * f + k), t = adj.twin[h];
-        if (t < 0) closed[face_label[f]] = 0;
-        if (t < 0 || h < t) ++edges[face_label[f]];
+    // A vertex takes the component of its last face (the faces around it rise): on a surface of millions of
+    // faces these passes run in parallel, each thread counting into its own per-component sums.
+    const std::size_t V = m.vertices.size(), F = m.faces.size(), C = std::size_t(std::max(components, 0));
+    vertex_label.resize(V);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t v = r.begin(); v != r.end(); ++v) {
+        const int last = adj.vf_start[v + 1] - 1;
+        vertex_label[v] = last >= adj.vf_start[v] ? face_label[std::size_t(adj.vf[std::size_t(last)])] : -1;
       }
-    }
-    for (size_t c = 0; c < euler.size(); ++c) euler[c] += faces[c] - edges[c];
+    });
+    struct Counts {
+      std::vector<std::int64_t> vertices, edges, faces;
+      std::vector<char> open;
+    };
+    tbb::combinable<Counts> counts([C] { return Counts{std::vector<std::int64_t>(C, 0), std::vector<std::int64_t>(C, 0),
+                                                       std::vector<std::int64_t>(C, 0), std::vector<char>(C, 0)}; });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::max(V, F), 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+      Counts& c = counts.local();
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        if (i < V && vertex_label[i] >= 0) ++c.vertices[std::size_t(vertex_label[i])];
+        if (i >= F) continue;
+        const std::size_t label = std::size_t(face_label[i]);
+        ++c.faces[label];
+        for (int k = 0; k < 3; ++k) {
+          const int h = int(3 * i) + k, t = adj.twin[std::size_t(h)];
+          if (t < 0) c.open[label] = 1;
+          if (t < 0 || h < t) ++c.edges[label];
+        }
+      }
+    });
+    euler.assign(C, 0);
+    closed.assign(C, 1);
+    counts.combine_each([&](const Counts& c) {
+      for (std::size_t k = 0; k < C; ++k) {
+        euler[k] += c.vertices[k] - c.edges[k] + c.faces[k];
+        if (c.open[k]) closed[k] = 0;
+      }
+    });
   }
 
   void check(const std::vector<int>& loop) const {
