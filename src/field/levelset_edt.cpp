@@ -75,8 +75,7 @@ namespace {
 
 // Each vertex's nearest site (F, -1 where none) and the squared distance to its surface point in units of
 // voxel_size (D).
-void nearest_sites(const ScalarGrid& grid, const std::vector<Site>& sites, GridArray<float>& D,
-                   GridArray<std::int32_t>& F) {
+void transform(const ScalarGrid& grid, const std::vector<Site>& sites, GridArray<float>& D, GridArray<std::int32_t>& F) {
   const int nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
   const std::size_t N = std::size_t(grid.vertex_count());
   // Squared spacing per axis in units of voxel_size (anisotropic grids; exactly 1 on isotropic ones).
@@ -232,7 +231,7 @@ GridArray<std::int32_t> nearest_sites(const ScalarGrid& grid, const std::vector<
   if (sites.empty()) return GridArray<std::int32_t>(std::size_t(grid.vertex_count()), -1);
   GridArray<float> D;
   GridArray<std::int32_t> F;
-  nearest_sites(grid, sites, D, F);
+  transform(grid, sites, D, F);
   return F;
 }
 
@@ -245,7 +244,7 @@ void complete_by_feature_transform(ScalarGrid& grid, const std::vector<std::uint
   const std::size_t N = std::size_t(grid.vertex_count());
   GridArray<float> D;
   GridArray<std::int32_t> F;
-  nearest_sites(grid, sites, D, F);
+  transform(grid, sites, D, F);
   const double h = grid.voxel_size;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t idx = r.begin(); idx != r.end(); ++idx) {

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "chokeloops/field/levelset.h"
+#include "common/first_non_finite.h"
 #include "feature_transform.h"
 
 namespace chokeloops {
@@ -162,7 +163,7 @@ void rasterise(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const
 // the exact feature transform with the atom centres as sites.
 void far_field(ScalarGrid& g, const std::vector<std::array<double, 3>>& c, const std::vector<double>& R) {
   // The vertices left to fill are those the rasterisation did not reach (+inf).
-  if (std::all_of(g.values.begin(), g.values.end(), [](float x) { return std::isfinite(x); })) return;
+  if (detail::first_non_finite(g.values.data(), g.values.size()) == g.values.size()) return;
   const double h = g.voxel_size;
   // One site per vertex, the first atom there (two centres this close are one, seen from far away): the
   // atoms sorted by their vertex rather than a grid-sized mark array.
