@@ -147,6 +147,62 @@ bool Shortener::build_band(const std::vector<int>& region, const detail::FlatInt
   return w == 1 || w == -1;
 }
 
+std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
+                                      const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                                      const std::vector<char>& near, int max_k) {
+  const int never = max_k + 1;
+  // A face enters the band at the first k where build_band takes it: all three vertices allowed, or (when it
+  // touches the loop) each vertex allowed or next to the loop and one of them allowed.
+  auto face_entry = [&](int f) {
+    int a[3], n[3];
+    bool touches = false;
+    for (int j = 0; j < 3; ++j) {
+      const int* i = rid.find(mesh.faces[f][j]);
+      a[j] = i ? std::min(entry[std::size_t(*i)], never) : never;
+      n[j] = i ? near[std::size_t(*i)] : 0;
+      touches |= n[j] == 2;
+    }
+    int k = std::max({a[0], a[1], a[2]});
+    if (touches) {
+      int via_loop = std::min({a[0], a[1], a[2]});
+      for (int j = 0; j < 3; ++j) via_loop = std::max(via_loop, n[j] ? 0 : a[j]);
+      k = std::min(k, via_loop);
+    }
+    return k;
+  };
+  detail::FlatIntMap face_k;
+  std::vector<int> faces;
+  for (std::size_t i = 0; i < region.size(); ++i)
+    if (entry[i] <= max_k)
+      for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) {
+        const int f = adj.vf[j];
+        if (face_k.contains(f)) continue;
+        const int k = face_entry(f);
+        face_k.emplace(f, k);
+        if (k <= max_k) faces.push_back(f);
+      }
+  std::vector<long> delta(std::size_t(max_k) + 2, 0);
+  std::vector<int> vertex_k(region.size(), never);
+  for (int f : faces) {
+    const int k = face_k.at(f);
+    ++delta[std::size_t(k)];
+    for (int j = 0; j < 3; ++j) {
+      const std::size_t i = std::size_t(rid.at(mesh.faces[f][j]));
+      vertex_k[i] = std::min(vertex_k[i], k);
+      const int h = 3 * f + j, t = adj.twin[std::size_t(h)];
+      const int* tk = t >= 0 ? face_k.find(t / 3) : nullptr;
+      const int kt = tk ? *tk : never;
+      if (k < kt || (k == kt && h < t)) --delta[std::size_t(k)];  // the edge enters with the first of its faces
+    }
+  }
+  for (int k : vertex_k)
+    if (k <= max_k) ++delta[std::size_t(k)];
+  std::vector<long> chi(std::size_t(max_k) + 1, 0);
+  long sum = 0;
+  for (int k = 0; k <= max_k; ++k) chi[std::size_t(k)] = sum += delta[std::size_t(k)];
+  return chi;
+}
+
 // ---- Step 2: shortest edge loop in the band ------------------------------------------------------
 
 void Shortener::build_arcs() {

@@ -35,6 +35,14 @@ struct Band {
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };
 
+// The Euler characteristic V - E + F of the band that Shortener::build_band makes with k rings, for every k
+// in 0..max_k, from one pass over the faces it could take: a ring count whose band is not an annulus (not 0)
+// is refused without building that band. `entry[i]` is the first ring count at which region[i] is allowed
+// (above max_k: never); `near` as for build_band.
+std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
+                                      const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                                      const std::vector<char>& near, int max_k);
+
 struct Shortener {
   const SurfaceMesh& mesh;
   const MeshAdjacency& adj;
