@@ -13,6 +13,7 @@
 #include "chokeloops/surface/surface.h"
 #include "chokeloops/surface/topology.h"
 #include "loops/flat_int_map.h"
+#include "loops/shortener.h"
 
 using namespace chokeloops;
 
@@ -224,4 +225,51 @@ TEST(Shorten, FlatIntMapAgreesWithUnorderedMap) {
   EXPECT_THROW(flat.at(50000001), std::out_of_range);
   EXPECT_EQ(flat[123456789], 0);  // inserted as 0, as std::unordered_map's operator[]
   EXPECT_EQ(flat.size(), reference.size() + 1);
+}
+
+// The Euler characteristics that refuse a ring count unbuilt must be those of the bands build_band makes: a
+// meridian of a thin torus whose band wraps round the tube as it widens, with and without vertices barred
+// (holes in the band, and faces that enter only because they touch the loop).
+TEST(Shorten, BandEulerCharacteristicForEveryRingCountIsTheBuiltBands) {
+  auto m = extract_zero_surface(sample_field({40, 40, 40}, analytic::torus(0.3, 0.1)));
+  auto adj = build_adjacency(m);
+  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
+  const int max_k = 40;
+  detail::FlatIntMap rid;
+  std::vector<int> region, ring, around;
+  for (int v : loop)
+    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
+  for (std::size_t i = 0; i < region.size(); ++i) {
+    if (ring[i] >= max_k) continue;
+    adj.neighbours(m, region[i], around);
+    for (int w : around)
+      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
+  }
+  std::vector<char> near(region.size());
+  for (std::size_t i = 0; i < region.size(); ++i) near[i] = ring[i] == 0 ? 2 : ring[i] == 1 ? 1 : 0;
+  int annuli = 0, not_annuli = 0;
+  for (int barred_every : {0, 7}) {
+    std::vector<int> entry = ring;
+    if (barred_every)
+      for (std::size_t i = 0; i < region.size(); i += std::size_t(barred_every)) entry[i] = max_k + 1;
+    const auto euler = shorten_detail::band_euler_by_rings(m, adj, region, rid, entry, near, max_k);
+    ASSERT_EQ(euler.size(), std::size_t(max_k) + 1);
+    shorten_detail::Shortener sh(m, adj);
+    for (int k = 1; k <= max_k; ++k) {
+      std::vector<char> allowed(region.size());
+      for (std::size_t i = 0; i < region.size(); ++i) allowed[i] = entry[i] <= k;
+      const bool annulus = sh.build_band(region, rid, allowed, near, loop);
+      long V = long(sh.band.global.size()), F = long(sh.band.faces.size()), E = 0;
+      for (int f : sh.band.faces)
+        for (int j = 0; j < 3; ++j) {
+          const int h = 3 * f + j, t = adj.twin[std::size_t(h)];
+          E += !(t >= 0 && sh.band.in_face.contains(t / 3)) || h < t;
+        }
+      EXPECT_EQ(euler[std::size_t(k)], V - E + F) << "k " << k << ", barred every " << barred_every;
+      if (annulus) EXPECT_EQ(euler[std::size_t(k)], 0);
+      (euler[std::size_t(k)] == 0 ? annuli : not_annuli) += 1;
+    }
+  }
+  EXPECT_GT(annuli, 0);
+  EXPECT_GT(not_annuli, 0);
 }
