@@ -227,10 +227,12 @@ TEST(Shorten, FlatIntMapAgreesWithUnorderedMap) {
   EXPECT_EQ(flat.size(), reference.size() + 1);
 }
 
-// The Euler characteristics that refuse a ring count unbuilt must be those of the bands build_band makes: a
+// The band's candidate faces and the Euler characteristics that refuse a ring count unbuilt: for every ring
+// count, the faces are those the band's rule takes (each vertex allowed, or next to the loop for a face that
+// touches it and has an allowed vertex), and the characteristic is that of the band built from them. A
 // meridian of a thin torus whose band wraps round the tube as it widens, with and without vertices barred
 // (holes in the band, and faces that enter only because they touch the loop).
-TEST(Shorten, BandEulerCharacteristicForEveryRingCountIsTheBuiltBands) {
+TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
   auto m = extract_zero_surface(sample_field({40, 40, 40}, analytic::torus(0.3, 0.1)));
   auto adj = build_adjacency(m);
   auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
@@ -247,29 +249,49 @@ TEST(Shorten, BandEulerCharacteristicForEveryRingCountIsTheBuiltBands) {
   }
   std::vector<char> near(region.size());
   for (std::size_t i = 0; i < region.size(); ++i) near[i] = ring[i] == 0 ? 2 : ring[i] == 1 ? 1 : 0;
-  int annuli = 0, not_annuli = 0;
+  int annuli = 0, not_annuli = 0, touching_only = 0;
   for (int barred_every : {0, 7}) {
     std::vector<int> entry = ring;
     if (barred_every)
       for (std::size_t i = 0; i < region.size(); i += std::size_t(barred_every)) entry[i] = max_k + 1;
-    const auto euler = shorten_detail::band_euler_by_rings(m, adj, region, rid, entry, near, max_k);
-    ASSERT_EQ(euler.size(), std::size_t(max_k) + 1);
+    const auto c = shorten_detail::band_candidates(m, adj, region, rid, entry, near, max_k);
+    ASSERT_EQ(c.euler.size(), std::size_t(max_k) + 1);
+    ASSERT_TRUE(std::is_sorted(c.faces.begin(), c.faces.end()));
     shorten_detail::Shortener sh(m, adj);
     for (int k = 1; k <= max_k; ++k) {
-      std::vector<char> allowed(region.size());
-      for (std::size_t i = 0; i < region.size(); ++i) allowed[i] = entry[i] <= k;
-      const bool annulus = sh.build_band(region, rid, allowed, near, loop);
+      auto allowed = [&](int v) { const int* i = rid.find(v); return i && entry[std::size_t(*i)] <= k; };
+      auto near_of = [&](int v) { const int* i = rid.find(v); return i ? int(near[std::size_t(*i)]) : 0; };
+      std::vector<int> expected;
+      for (std::size_t f = 0; f < m.faces.size(); ++f) {
+        const auto& t = m.faces[f];
+        int n_allowed = 0, n_ok = 0;
+        bool touches = false;
+        for (int j = 0; j < 3; ++j) {
+          n_allowed += allowed(t[j]);
+          n_ok += allowed(t[j]) || near_of(t[j]) > 0;
+          touches |= near_of(t[j]) == 2;
+        }
+        if (n_allowed == 3 || (n_allowed > 0 && n_ok == 3 && touches)) expected.push_back(int(f));
+        touching_only += n_allowed > 0 && n_allowed < 3 && n_ok == 3 && touches;
+      }
+      std::vector<int> got;
+      for (std::size_t i = 0; i < c.faces.size(); ++i)
+        if (c.entry[i] <= k) got.push_back(c.faces[i]);
+      ASSERT_EQ(got, expected) << "k " << k << ", barred every " << barred_every;
+      const bool annulus = sh.build_band(c, k, loop);
       long V = long(sh.band.global.size()), F = long(sh.band.faces.size()), E = 0;
       for (int f : sh.band.faces)
         for (int j = 0; j < 3; ++j) {
           const int h = 3 * f + j, t = adj.twin[std::size_t(h)];
           E += !(t >= 0 && sh.band.in_face.contains(t / 3)) || h < t;
         }
-      EXPECT_EQ(euler[std::size_t(k)], V - E + F) << "k " << k << ", barred every " << barred_every;
-      if (annulus) EXPECT_EQ(euler[std::size_t(k)], 0);
-      (euler[std::size_t(k)] == 0 ? annuli : not_annuli) += 1;
+      EXPECT_EQ(F, long(expected.size()));
+      EXPECT_EQ(c.euler[std::size_t(k)], V - E + F) << "k " << k << ", barred every " << barred_every;
+      if (annulus) EXPECT_EQ(c.euler[std::size_t(k)], 0);
+      (c.euler[std::size_t(k)] == 0 ? annuli : not_annuli) += 1;
     }
   }
   EXPECT_GT(annuli, 0);
   EXPECT_GT(not_annuli, 0);
+  EXPECT_GT(touching_only, 0);
 }

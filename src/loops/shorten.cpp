@@ -79,15 +79,13 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   std::vector<int> entry(region.size());
   for (size_t i = 0; i < region.size(); ++i)
     entry[i] = dist.empty() || dist[i] <= opt.max_move ? ring[i] : max_rings + 1;
-  // Most ring counts the search below tries give a band that wraps round or swallows a handle; their Euler
-  // characteristic, known for every count at once, refuses them without building the band.
-  const std::vector<long> euler = shorten_detail::band_euler_by_rings(mesh, adj, region, rid, entry, near_loop, max_rings);
+  // Most ring counts the search below tries on a bumpy surface give a band that wraps round or swallows a
+  // handle; their Euler characteristic, known for every count at once, refuses them without building the
+  // band, and every band is taken from the one list of candidate faces.
+  const shorten_detail::BandCandidates candidates =
+      shorten_detail::band_candidates(mesh, adj, region, rid, entry, near_loop, max_rings);
   auto try_rings = [&](int k) {
-    if (euler[std::size_t(k)] != 0) return false;
-    std::vector<char> allowed(region.size(), 0);
-    for (size_t i = 0; i < region.size(); ++i)
-      if (entry[i] <= k) allowed[i] = 1;
-    return sh.build_band(region, rid, allowed, near_loop, loop);
+    return candidates.euler[std::size_t(k)] == 0 && sh.build_band(candidates, k, loop);
   };
   // The widest annulus band: max_rings, else halve until one works, then bisect between that and the
   // last failure (wider bands stop being annuli when they wrap around or swallow a handle).

@@ -14,31 +14,13 @@ namespace chokeloops::shorten_detail {
 
 // ---- Step 1: band --------------------------------------------------------------------------------
 
-bool Shortener::build_band(const std::vector<int>& region, const detail::FlatIntMap& rid,
-                           const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop) {
+bool Shortener::build_band(const BandCandidates& candidates, int rings, const std::vector<int>& loop) {
   Band B;
-  auto allowed_vertex = [&](int v) { const int* i = rid.find(v); return i && allowed[std::size_t(*i)]; };
-  auto near_loop = [&](int v) { const int* i = rid.find(v); return i ? int(near[std::size_t(*i)]) : 0; };
-  // Collect faces around allowed vertices.
-  std::vector<int> cand;
-  for (size_t i = 0; i < region.size(); ++i)
-    if (allowed[i])
-      for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) cand.push_back(adj.vf[j]);
-  std::sort(cand.begin(), cand.end());
-  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-  for (int f : cand) {
-    auto& t = mesh.faces[f];
-    bool ok = true;
-    for (int k = 0; k < 3; ++k) ok = ok && (allowed_vertex(t[k]) || near_loop(t[k]));
-    if (!ok) continue;
-    // faces touching the loop are always allowed; others need all vertices allowed
-    if (!(allowed_vertex(t[0]) && allowed_vertex(t[1]) && allowed_vertex(t[2]))) {
-      bool touches = near_loop(t[0]) == 2 || near_loop(t[1]) == 2 || near_loop(t[2]) == 2;
-      if (!touches) continue;
+  for (std::size_t i = 0; i < candidates.faces.size(); ++i)
+    if (candidates.entry[i] <= rings) {
+      B.in_face.emplace(candidates.faces[i], 1);
+      B.faces.push_back(candidates.faces[i]);
     }
-    B.in_face.emplace(f, 1);
-    B.faces.push_back(f);
-  }
   if (B.faces.empty()) return false;
   for (int f : B.faces)
     for (int k = 0; k < 3; ++k) {
@@ -147,12 +129,10 @@ bool Shortener::build_band(const std::vector<int>& region, const detail::FlatInt
   return w == 1 || w == -1;
 }
 
-std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
-                                      const detail::FlatIntMap& rid, const std::vector<int>& entry,
-                                      const std::vector<char>& near, int max_k) {
+BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
+                               const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                               const std::vector<char>& near, int max_k) {
   const int never = max_k + 1;
-  // A face enters the band at the first k where build_band takes it: all three vertices allowed, or (when it
-  // touches the loop) each vertex allowed or next to the loop and one of them allowed.
   auto face_entry = [&](int f) {
     int a[3], n[3];
     bool touches = false;
@@ -170,8 +150,8 @@ std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacen
     }
     return k;
   };
+  BandCandidates c;
   detail::FlatIntMap face_k;
-  std::vector<int> faces;
   for (std::size_t i = 0; i < region.size(); ++i)
     if (entry[i] <= max_k)
       for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) {
@@ -179,16 +159,18 @@ std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacen
         if (face_k.contains(f)) continue;
         const int k = face_entry(f);
         face_k.emplace(f, k);
-        if (k <= max_k) faces.push_back(f);
+        if (k <= max_k) c.faces.push_back(f);
       }
+  std::sort(c.faces.begin(), c.faces.end());
+  c.entry.resize(c.faces.size());
   std::vector<long> delta(std::size_t(max_k) + 2, 0);
   std::vector<int> vertex_k(region.size(), never);
-  for (int f : faces) {
-    const int k = face_k.at(f);
+  for (std::size_t i = 0; i < c.faces.size(); ++i) {
+    const int f = c.faces[i], k = c.entry[i] = face_k.at(f);
     ++delta[std::size_t(k)];
     for (int j = 0; j < 3; ++j) {
-      const std::size_t i = std::size_t(rid.at(mesh.faces[f][j]));
-      vertex_k[i] = std::min(vertex_k[i], k);
+      const std::size_t v = std::size_t(rid.at(mesh.faces[f][j]));
+      vertex_k[v] = std::min(vertex_k[v], k);
       const int h = 3 * f + j, t = adj.twin[std::size_t(h)];
       const int* tk = t >= 0 ? face_k.find(t / 3) : nullptr;
       const int kt = tk ? *tk : never;
@@ -197,10 +179,10 @@ std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacen
   }
   for (int k : vertex_k)
     if (k <= max_k) ++delta[std::size_t(k)];
-  std::vector<long> chi(std::size_t(max_k) + 1, 0);
+  c.euler.assign(std::size_t(max_k) + 1, 0);
   long sum = 0;
-  for (int k = 0; k <= max_k; ++k) chi[std::size_t(k)] = sum += delta[std::size_t(k)];
-  return chi;
+  for (int k = 0; k <= max_k; ++k) c.euler[std::size_t(k)] = sum += delta[std::size_t(k)];
+  return c;
 }
 
 // ---- Step 2: shortest edge loop in the band ------------------------------------------------------

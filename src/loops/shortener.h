@@ -35,13 +35,19 @@ struct Band {
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };
 
-// The Euler characteristic V - E + F of the band that Shortener::build_band makes with k rings, for every k
-// in 0..max_k, from one pass over the faces it could take: a ring count whose band is not an annulus (not 0)
-// is refused without building that band. `entry[i]` is the first ring count at which region[i] is allowed
-// (above max_k: never); `near` as for build_band.
-std::vector<long> band_euler_by_rings(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
-                                      const detail::FlatIntMap& rid, const std::vector<int>& entry,
-                                      const std::vector<char>& near, int max_k);
+// The faces a band around the loop may take, each with the first ring count k at which it enters: all three
+// vertices allowed, or (a face touching the loop) each vertex allowed or next to the loop and one of them
+// allowed. A vertex region[i] is allowed from k = entry[i] on (above max_k: never); near[i] is 2 on the
+// loop, 1 one ring away. `euler[k]` is V - E + F of the band of k rings, for every k in 0..max_k: a ring
+// count whose band is not an annulus (not 0) is refused without building it.
+struct BandCandidates {
+  std::vector<int> faces;   // rising
+  std::vector<int> entry;   // per face
+  std::vector<long> euler;  // per ring count
+};
+BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
+                               const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                               const std::vector<char>& near, int max_k);
 
 struct Shortener {
   const SurfaceMesh& mesh;
@@ -71,11 +77,9 @@ struct Shortener {
   bool contains(int f, int v) const { auto& t = mesh.faces[f]; return t[0] == v || t[1] == v || t[2] == v; }
 
   // ---- Step 1: band (shorten_band.cpp) -----------------------------------------------------------
-  // Builds the band of faces allowed by `allowed_vertex` and checks that it is an annulus; sets the cut.
-  // `region`: mesh vertices near the loop; `allowed[i]` and `near_loop[i]` (2: on the loop, 1: one ring
-  // away) refer to region[i]; `rid` maps mesh vertices to region indices.
-  bool build_band(const std::vector<int>& region, const detail::FlatIntMap& rid,
-                  const std::vector<char>& allowed, const std::vector<char>& near, const std::vector<int>& loop);
+  // Builds the band of the candidates' faces that enter within `rings` rings and checks that it is an
+  // annulus; sets the cut and the input loop's winding across it.
+  bool build_band(const BandCandidates& candidates, int rings, const std::vector<int>& loop);
 
   // ---- Step 2: shortest edge loop in the band (shorten_band.cpp) ---------------------------------
   struct Arc { int to; double len; int sign; };
