@@ -195,8 +195,8 @@ void Shortener::build_arcs() {
       int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
       double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
       int s = hsign(h);
-      tmp[a].push_back({c, L, s});
-      tmp[c].push_back({a, L, -s});
+      tmp[a].push_back({L, c, s});
+      tmp[c].push_back({L, a, -s});
     }
   arc_start.assign(tmp.size() + 1, 0);
   arcs.clear();
@@ -208,6 +208,44 @@ void Shortener::build_arcs() {
   }
 }
 
+namespace {
+// A 4-ary min-heap of (distance, node), popped in the order of that pair as std::priority_queue with
+// std::greater pops it (so the search relaxes in the same order): shallower than a binary heap, and its
+// storage is the thread's, kept between searches.
+struct QueueEntry { double d; int node; };
+inline bool before(const QueueEntry& a, const QueueEntry& b) { return a.d < b.d || (a.d == b.d && a.node < b.node); }
+void heap_push(std::vector<QueueEntry>& h, QueueEntry e) {
+  std::size_t i = h.size();
+  h.push_back(e);
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 4;
+    if (!before(e, h[parent])) break;
+    h[i] = h[parent];
+    i = parent;
+  }
+  h[i] = e;
+}
+QueueEntry heap_pop(std::vector<QueueEntry>& h) {
+  const QueueEntry top = h[0], last = h.back();
+  h.pop_back();
+  const std::size_t n = h.size();
+  if (n == 0) return top;
+  std::size_t i = 0;
+  for (;;) {
+    const std::size_t first = 4 * i + 1;
+    if (first >= n) break;
+    std::size_t best = first;
+    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
+      if (before(h[c], h[best])) best = c;
+    if (!before(h[best], last)) break;
+    h[i] = h[best];
+    i = best;
+  }
+  h[i] = last;
+  return top;
+}
+}  // namespace
+
 std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
   // Sheets -3..3 of the cover. The searches of one band reuse their arrays (one set per thread): only the
   // nodes a search touched are reset, so a search costs what it explores, not the band's size times 7.
@@ -215,6 +253,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
   struct Scratch {
     std::vector<double> d;
     std::vector<int> from, touched;
+    std::vector<QueueEntry> queue;
   };
   static thread_local Scratch scratch;
   const std::size_t nodes = band.global.size() * std::size_t(NL);
@@ -226,15 +265,14 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
     from.assign(nodes, -1);
   }
   touched.clear();
-  using QE = std::pair<double, int>;
-  std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
+  auto& q = scratch.queue;
+  q.clear();
   const int src = s * NL + L0, dst = s * NL + L0 + band.winding;
   d[src] = 0;
   touched.push_back(src);
-  q.push({0, src});
+  heap_push(q, {0, src});
   while (!q.empty()) {
-    auto [dv, node] = q.top();
-    q.pop();
+    const auto [dv, node] = heap_pop(q);
     if (dv > d[node]) continue;
     if (node == dst) break;
     int v = node / NL, layer = node % NL;
@@ -245,7 +283,8 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
       double nd = dv + arcs[i].len;
       if (nd < d[w]) {
         if (std::isinf(d[w])) touched.push_back(w);
-        d[w] = nd, from[w] = node, q.push({nd, w});
+        d[w] = nd, from[w] = node;
+        heap_push(q, {nd, w});
       }
     }
   }
