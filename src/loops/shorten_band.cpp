@@ -188,24 +188,32 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
 // ---- Step 2: shortest edge loop in the band ------------------------------------------------------
 
 void Shortener::build_arcs() {
-  std::vector<std::vector<Arc>> tmp(band.global.size());
+  // Both directions of every half-edge of the band, then each vertex's arcs by (target, sign) with the
+  // repeats (an inner edge is seen from both its faces) dropped: one flat sort, no list per vertex.
+  struct Tagged { int from; Arc arc; };
+  std::vector<Tagged> all;
+  all.reserve(band.faces.size() * 6);
   for (int f : band.faces)
     for (int k = 0; k < 3; ++k) {
       int h = 3 * f + k;
       int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
       double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
       int s = hsign(h);
-      tmp[a].push_back({L, c, s});
-      tmp[c].push_back({L, a, -s});
+      all.push_back({a, {L, c, s}});
+      all.push_back({c, {L, a, -s}});
     }
-  arc_start.assign(tmp.size() + 1, 0);
+  std::stable_sort(all.begin(), all.end(), [](const Tagged& x, const Tagged& y) {
+    return x.from != y.from ? x.from < y.from : x.arc.to != y.arc.to ? x.arc.to < y.arc.to : x.arc.sign < y.arc.sign;
+  });
+  arc_start.assign(band.global.size() + 1, 0);
   arcs.clear();
-  for (size_t v = 0; v < tmp.size(); ++v) {
-    std::sort(tmp[v].begin(), tmp[v].end(), [](const Arc& x, const Arc& y) { return x.to < y.to || (x.to == y.to && x.sign < y.sign); });
-    tmp[v].erase(std::unique(tmp[v].begin(), tmp[v].end(), [](const Arc& x, const Arc& y) { return x.to == y.to && x.sign == y.sign; }), tmp[v].end());
-    arcs.insert(arcs.end(), tmp[v].begin(), tmp[v].end());
-    arc_start[v + 1] = int(arcs.size());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const Tagged& t = all[i];
+    if (i > 0 && all[i - 1].from == t.from && all[i - 1].arc.to == t.arc.to && all[i - 1].arc.sign == t.arc.sign) continue;
+    arcs.push_back(t.arc);
+    ++arc_start[std::size_t(t.from) + 1];
   }
+  for (std::size_t v = 0; v < band.global.size(); ++v) arc_start[v + 1] += arc_start[v];
 }
 
 namespace {
