@@ -7,11 +7,13 @@
 //     max_move > 0) within surface distance max_move of it (the faces touching the loop are always in).
 //     The band must be an annulus (connected, manifold, Euler characteristic 0, two boundary curves) around
 //     which the loop winds once; otherwise the ring count is lowered until it is (0 rings left: the loop is
-//     returned unchanged, `rings` = 0).
+//     returned unchanged, `rings` = 0). The Euler characteristic of every ring count's band comes from one
+//     pass over the candidate faces, so that counts whose band is no annulus are refused without building it.
 //  2. Shortest edge loop: the band is cut along a dual path from one boundary curve to the other; a
 //     Dijkstra in the (truncated) cyclic cover of the band from a vertex to its lift one sheet up gives the
-//     shortest edge loop through that vertex in the loop's class; repeated from the midpoint of the result
-//     until it stops improving.
+//     shortest edge loop through that vertex in the loop's class; run from the loop's first vertex and
+//     `cut_samples` vertices along the cut, then from the midpoint of the best result until it stops
+//     improving.
 //  3. String pulling: the triangle strip around that edge loop (at each vertex, the fan on the side of
 //     smaller angle) is unfolded and the shortest path through it found by the funnel algorithm, closing
 //     the loop by alternating the cut portal; then wherever the loop bends around a vertex whose angle on
