@@ -1,7 +1,6 @@
 // OpenVDB file IO and FloatGrid <-> ScalarGrid conversions (stage `levelset`, see DESIGN.md §4).
 #include "chokeloops/io/vdb_io.h"
 
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -10,9 +9,8 @@
 
 #include <openvdb/io/File.h>
 #include <openvdb/tools/Dense.h>
-#include <tbb/parallel_for.h>
-#include <tbb/blocked_range.h>
 
+#include "common/first_non_finite.h"
 #include "vdb_guard.h"
 
 namespace chokeloops {
@@ -205,16 +203,8 @@ ScalarGrid read_vdb_dense(const std::string& path, const std::string& grid_name)
   auto grid = read_vdb_float_grid(path, grid_name);
   const std::string what = quoted(path) + " grid '" + grid->getName() + "'";
   ScalarGrid out = dense_from_grid(*grid, grid->evalActiveVoxelBoundingBox(), what);
-  std::atomic<bool> bad{false};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.values.size(), 1 << 16),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i)
-                        if (!std::isfinite(out.values[i])) {
-                          bad = true;
-                          return;
-                        }
-                    });
-  if (bad) throw Error(what + ": holds non-finite values (NaN or infinity)");
+  if (detail::first_non_finite(out.values.data(), out.values.size()) < out.values.size())
+    throw Error(what + ": holds non-finite values (NaN or infinity)");
   return out;
 }
 

@@ -14,6 +14,7 @@
 
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/grid.h"
+#include "common/first_non_finite.h"
 #include "volume_io_common.h"
 
 namespace chokeloops {
@@ -68,13 +69,12 @@ void finish_affine(VolumeImage& v) {
 }
 
 void check_values(const VolumeImage& v) {
-  for (std::size_t i = 0; i < v.values.size(); ++i)
-    if (!std::isfinite(v.values[i])) {
-      const std::size_t nx = std::size_t(v.dims[0]), ny = std::size_t(v.dims[1]);
-      fail(v.path, std::string("voxel (") + std::to_string(i % nx) + "," + std::to_string(i / nx % ny) + "," +
-                       std::to_string(i / (nx * ny)) + ") is " + (std::isnan(v.values[i]) ? "NaN" : "infinite") +
-                       "; the image must hold finite values");
-    }
+  const std::size_t i = detail::first_non_finite(v.values.data(), v.values.size());
+  if (i == v.values.size()) return;
+  const std::size_t nx = std::size_t(v.dims[0]), ny = std::size_t(v.dims[1]);
+  fail(v.path, std::string("voxel (") + std::to_string(i % nx) + "," + std::to_string(i / nx % ny) + "," +
+                   std::to_string(i / (nx * ny)) + ") is " + (std::isnan(v.values[i]) ? "NaN" : "infinite") +
+                   "; the image must hold finite values");
 }
 
 std::vector<std::uint8_t> packed_values(const VolumeImage& image) {
