@@ -150,8 +150,8 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
     }
     return k;
   };
-  BandCandidates c;
   detail::FlatIntMap face_k;
+  std::vector<std::pair<int, int>> taken;  // (face, entry ring), sorted by face below
   for (std::size_t i = 0; i < region.size(); ++i)
     if (entry[i] <= max_k)
       for (int j = adj.vf_start[region[i]]; j < adj.vf_start[region[i] + 1]; ++j) {
@@ -159,14 +159,17 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
         if (face_k.contains(f)) continue;
         const int k = face_entry(f);
         face_k.emplace(f, k);
-        if (k <= max_k) c.faces.push_back(f);
+        if (k <= max_k) taken.push_back({f, k});
       }
-  std::sort(c.faces.begin(), c.faces.end());
-  c.entry.resize(c.faces.size());
+  std::sort(taken.begin(), taken.end());
+  BandCandidates c;
+  c.faces.reserve(taken.size());
+  c.entry.reserve(taken.size());
+  for (const auto& [f, k] : taken) c.faces.push_back(f), c.entry.push_back(k);
   std::vector<long> delta(std::size_t(max_k) + 2, 0);
   std::vector<int> vertex_k(region.size(), never);
   for (std::size_t i = 0; i < c.faces.size(); ++i) {
-    const int f = c.faces[i], k = c.entry[i] = face_k.at(f);
+    const int f = c.faces[i], k = c.entry[i];
     ++delta[std::size_t(k)];
     for (int j = 0; j < 3; ++j) {
       const std::size_t v = std::size_t(rid.at(mesh.faces[f][j]));
