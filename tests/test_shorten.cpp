@@ -295,3 +295,56 @@ TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
   EXPECT_GT(not_annuli, 0);
   EXPECT_GT(touching_only, 0);
 }
+
+// Step 3's rounds redo the funnel only in windows around the swaps (Shortener::refunnel): after every round,
+// the loop must be the one a funnel over the whole strip gives, on a torus whose strip unfolds without
+// overlapping itself. A very wiggly meridian's own edge loop makes many rounds with swaps far apart.
+TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
+  const double R = 0.3, r = 0.12;
+  auto m = extract_zero_surface(sample_field({128, 128, 128}, analytic::torus(R, r)));
+  auto adj = build_adjacency(m);
+  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, R, r, 0.3, 0.15, 7));
+  const int max_k = 12;
+  detail::FlatIntMap rid;
+  std::vector<int> region, ring, around;
+  for (int v : loop)
+    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
+  for (std::size_t i = 0; i < region.size(); ++i) {
+    if (ring[i] >= max_k) continue;
+    adj.neighbours(m, region[i], around);
+    for (int w : around)
+      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
+  }
+  std::vector<char> near(region.size());
+  for (std::size_t i = 0; i < region.size(); ++i) near[i] = ring[i] == 0 ? 2 : ring[i] == 1 ? 1 : 0;
+  const auto candidates = shorten_detail::band_candidates(m, adj, region, rid, ring, near, max_k);
+  shorten_detail::Shortener sh(m, adj);
+  ASSERT_TRUE(sh.build_band(candidates, max_k, loop));
+  std::vector<int> S;
+  ASSERT_TRUE(sh.strip_from_edge_loop(loop, S));
+  std::vector<double> s(S.size(), 0.5);
+  std::vector<shorten_detail::Shortener::Apex> apexes;
+  double L = sh.relax(S, 0, s, apexes);
+  const double first = L;
+  int rounds = 0;
+  for (; rounds < 400; ++rounds) {
+    std::vector<int> S2 = S;
+    std::vector<double> s2 = s;
+    std::vector<shorten_detail::Shortener::Apex> kept, whole_apexes;
+    std::vector<std::array<int, 2>> dirty;
+    int cut = 0;
+    if (!sh.swap_batch(S2, s2, apexes, cut, 1 << 30, &kept, &dirty)) break;
+    std::vector<double> whole = s2;
+    const double L_whole = sh.relax(S2, 0, whole, whole_apexes);
+    const double L_windows = sh.refunnel(S2, s2, kept, dirty);
+    ASSERT_NEAR(L_windows, L_whole, 1e-9 * L_whole) << "round " << rounds;
+    if (!(L_windows < L + 1e-9 * L)) break;
+    S.swap(S2), s.swap(s2), apexes.swap(kept), L = L_windows;
+  }
+  std::printf("wiggly meridian: edge loop relaxed %.6f -> %.6f after %d rounds (%d windows, %d whole-strip funnels), 2 pi r %.6f\n",
+              first, L, rounds, sh.refunnel_windows, sh.refunnel_fallbacks, 2 * M_PI * r);
+  EXPECT_GT(rounds, 10);
+  EXPECT_GT(sh.refunnel_windows, 20);
+  EXPECT_LT(L, first);
+  EXPECT_NEAR(L, 2 * M_PI * r, 0.03 * 2 * M_PI * r);
+}

@@ -175,14 +175,17 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     std::vector<int> S2 = S;
     std::vector<double> s2 = sp;
     int c2 = 0;
-    int n = sh.swap_batch(S2, s2, apexes, c2, 1 << 30);
-    if (!n) break;
     std::vector<Shortener::Apex> ap2;
-    double L2 = sh.relax(S2, c2, s2, ap2);
+    std::vector<std::array<int, 2>> dirty;
+    int n = sh.swap_batch(S2, s2, apexes, c2, 1 << 30, &ap2, &dirty);
+    if (!n) break;
+    // Only the funnel between the apexes around each swap is run again (a round costs what it changes).
+    double L2 = sh.refunnel(S2, s2, ap2, dirty);
     if (!(L2 < L - 1e-12 * L) && n > 1) {  // the batch did not help: the single best swap alone
       S2 = S, s2 = sp, c2 = 0;
-      n = sh.swap_batch(S2, s2, apexes, c2, 1);
-      L2 = sh.relax(S2, c2, s2, ap2);
+      n = sh.swap_batch(S2, s2, apexes, c2, 1, &ap2, &dirty);
+      if (!n) break;
+      L2 = sh.refunnel(S2, s2, ap2, dirty);
     }
     if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
       std::fprintf(stderr, "swap round %d: %d swaps, %.9f -> %.9f (strip %zu)\n", it, n, L, L2, S2.size());
@@ -191,6 +194,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = std::min(L, L2);
     R.swaps += n;
   }
+  // The windows kept every crossing but the one the first funnel was cut at; a funnel over the whole
+  // strip settles that one too.
+  if (R.swaps > 0) L = sh.relax(S, 0, sp, apexes);
   sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
   double Lp = closed_length(pts);

@@ -17,6 +17,14 @@ double len2(P2 a, P2 b) { return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.
 double triarea2(P2 a, P2 b, P2 c) { return (c.x - a.x) * (b.y - a.y) - (b.x - a.x) * (c.y - a.y); }
 bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
 
+// A thread's funnel arrays, kept between calls: a shortening runs the funnel hundreds of times.
+struct FunnelScratch {
+  std::vector<P2> L2, R2;
+  std::vector<int> Lv, Rv;
+  std::vector<P2> pts;
+  std::vector<int> pidx, pside;
+};
+
 }  // namespace
 
 bool Shortener::fan(int a, int p, int b, bool left, std::vector<int>& out, double& angle) const {
@@ -84,21 +92,25 @@ int Shortener::portal_of(int f, int g) const {
 }
 
 double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes) {
+  apexes.clear();
+  funnel_segment(S, c, int(S.size()), s[c], s[c], s, apexes);
+  return params_length(S, s);
+}
+
+void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to,
+                               std::vector<double>& s, std::vector<Apex>& apexes) {
   const int m = int(S.size());
-  portal_h.resize(m);
-  for (int j = 0; j < m; ++j) portal_h[j] = portal_of(S[j], S[(j + 1) % m]);
-  // Unfold: 2D coordinates of portal endpoints, in traversal order i = 0..m (portal c+i).
-  std::vector<P2> L2(m + 1), R2(m + 1);
-  std::vector<int> Lv(m + 1), Rv(m + 1);
-  {
-    int h = portal_h[c];
-    Lv[0] = vert(h), Rv[0] = vert_to(h);
-    L2[0] = {0, 0};
-    R2[0] = {dist3(mesh.vertices[Lv[0]], mesh.vertices[Rv[0]]), 0};
-  }
-  for (int i = 1; i <= m; ++i) {
-    int f = S[(c + i) % m];
-    int he = portal_h[(c + i - 1) % m];  // entry half-edge x->y inside f
+  thread_local FunnelScratch scratch;
+  auto& [L2, R2, Lv, Rv, pts, pidx, pside] = scratch;
+  L2.resize(count + 1), R2.resize(count + 1), Lv.resize(count + 1), Rv.resize(count + 1);
+  // Unfold: 2D coordinates of portal endpoints, in traversal order i = 0..count (portal from+i).
+  int h = portal_of(S[from], S[(from + 1) % m]);
+  Lv[0] = vert(h), Rv[0] = vert_to(h);
+  L2[0] = {0, 0};
+  R2[0] = {dist3(mesh.vertices[Lv[0]], mesh.vertices[Rv[0]]), 0};
+  for (int i = 1; i <= count; ++i) {
+    const int he = h;  // entry half-edge x->y inside the face S[from+i]
+    h = portal_of(S[(from + i) % m], S[(from + i + 1) % m]);  // exit portal: its endpoints are vertices of that face
     int x = vert(he), y = vert_to(he), z = vert(MeshAdjacency::prev(he));
     P2 X = L2[i - 1], Y = R2[i - 1];
     double dxy = len2(X, Y), dxz = dist3(mesh.vertices[x], mesh.vertices[z]), dyz = dist3(mesh.vertices[y], mesh.vertices[z]);
@@ -106,31 +118,27 @@ double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& 
     double bb = std::sqrt(std::max(0.0, dxz * dxz - a * a));
     P2 u{(Y.x - X.x) / dxy, (Y.y - X.y) / dxy}, perp{-u.y, u.x};
     P2 Z{X.x + a * u.x + bb * perp.x, X.y + a * u.y + bb * perp.y};
-    int ho = portal_h[(c + i) % m];  // exit portal: its endpoints are vertices of f
-    int lx = vert(ho), ry = vert_to(ho);
+    int lx = vert(h), ry = vert_to(h);
     auto pos = [&](int v) { return v == x ? X : v == y ? Y : Z; };
-    (void)f;
     Lv[i] = lx, Rv[i] = ry;
     L2[i] = pos(lx), R2[i] = pos(ry);
   }
-  // Funnel portals: start point, portals 1..m-1, end point.
+  // Funnel portals: start point, portals 1..count-1, end point.
   auto at = [](P2 a, P2 b, double t) { return P2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)}; };
-  P2 start = at(L2[0], R2[0], s[c]), end = at(L2[m], R2[m], s[c]);
-  std::vector<P2> pl(m + 1), pr(m + 1);
-  pl[0] = pr[0] = start;
-  pl[m] = pr[m] = end;
-  for (int i = 1; i < m; ++i) pl[i] = L2[i], pr[i] = R2[i];
-  std::vector<P2> pts{start};
-  std::vector<int> pidx{0};
-  std::vector<int> pside{-1};
+  const P2 start = at(L2[0], R2[0], s_from), end = at(L2[count], R2[count], s_to);
+  auto portal_left = [&](int i) { return i == 0 ? start : i == count ? end : L2[i]; };
+  auto portal_right = [&](int i) { return i == 0 ? start : i == count ? end : R2[i]; };
+  pts.assign(1, start);
+  pidx.assign(1, 0);
+  pside.assign(1, -1);
   // Each funnel point carries its portal index and side (0 left endpoint, 1 right, -1 start point); a
   // reset funnel side inherits the apex's, so a re-added apex keeps its true position.
-  P2 apex = start, left = pl[0], right = pr[0];
+  P2 apex = start, left = start, right = start;
   int apexIndex = 0, leftIndex = 0, rightIndex = 0;
   int apexSide = -1, leftSide = -1, rightSide = -1;
-  for (int i = 1; i <= m; ++i) {
-    P2 l = pl[i], r = pr[i];
-    int lside = i == m ? -1 : 0, rside = i == m ? -1 : 1;
+  for (int i = 1; i <= count; ++i) {
+    P2 l = portal_left(i), r = portal_right(i);
+    int lside = i == count ? -1 : 0, rside = i == count ? -1 : 1;
     if (triarea2(apex, right, r) <= 0.0) {
       if (same(apex, right) || triarea2(apex, left, r) > 0.0) {
         right = r, rightIndex = i, rightSide = rside;
@@ -154,18 +162,15 @@ double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& 
       }
     }
   }
-  pts.push_back(end), pidx.push_back(m), pside.push_back(-1);
-  double length = 0;
-  for (size_t k = 0; k + 1 < pts.size(); ++k) length += len2(pts[k], pts[k + 1]);
-  // Crossing parameters.
-  std::vector<double> ns(m);
-  ns[c] = s[c];
-  apexes.clear();
+  pts.push_back(end), pidx.push_back(count), pside.push_back(-1);
+  // Crossing parameters. The funnel assumes a sleeve that unfolds without overlapping itself; where the
+  // strip overlaps (tiny faces near clamped vertices, fans of more than 2*pi) its 2D length can be
+  // optimistic, so callers measure the polyline actually built from the crossings.
   for (size_t k = 0; k + 1 < pts.size(); ++k) {
     if (pside[k] >= 0) {
       int i = pidx[k];
-      ns[(c + i) % m] = pside[k] == 0 ? 0.0 : 1.0;
-      apexes.push_back({(c + i) % m, pside[k] == 0 ? Lv[i] : Rv[i]});
+      s[(from + i) % m] = pside[k] == 0 ? 0.0 : 1.0;
+      apexes.push_back({(from + i) % m, pside[k] == 0 ? Lv[i] : Rv[i]});
     }
     P2 A = pts[k], B = pts[k + 1];
     for (int i = pidx[k] + 1; i < pidx[k + 1]; ++i) {
@@ -173,15 +178,9 @@ double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& 
       P2 d{B.x - A.x, B.y - A.y}, e{Rp.x - Lp.x, Rp.y - Lp.y};
       double den = e.x * d.y - e.y * d.x;
       double t = std::fabs(den) < 1e-300 ? 0.5 : ((A.x - Lp.x) * d.y - (A.y - Lp.y) * d.x) / den;
-      ns[(c + i) % m] = std::min(1.0, std::max(0.0, t));
+      s[(from + i) % m] = std::min(1.0, std::max(0.0, t));
     }
   }
-  s = ns;
-  // The funnel assumes a sleeve that unfolds without overlapping itself; where the strip overlaps (tiny
-  // faces near clamped vertices, fans of more than 2*pi) its length can be optimistic, so report the
-  // length of the polyline actually built from the crossings.
-  (void)length;
-  return params_length(S, s);
 }
 
 P3 Shortener::crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const {
@@ -261,6 +260,76 @@ double Shortener::relax(const std::vector<int>& S, int c, std::vector<double>& s
   return best;
 }
 
+// Why windows suffice: the shortest path through a sleeve between two fixed points is unique, and where it
+// bends it wraps a sleeve vertex (an apex). Between two apexes that a swap did not move, the path is the
+// shortest one through the faces between them; so if the funnel over a window from apex E1 to apex E2 still
+// bends at the apexes I1, I2 next to them inside, the path from E1 to I1 and from I2 to E2 is what it was,
+// the bends at E1 and E2 are as before, and the whole loop is what a funnel over the whole strip gives.
+double Shortener::refunnel(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
+                           const std::vector<std::array<int, 2>>& dirty) {
+  const int m = int(S.size());
+  std::vector<Apex> found, merged;
+  std::vector<char> pending(dirty.size(), 1);
+  auto forward = [m](int from, int to) { return ((to - from) % m + m) % m; };  // portals from `from` to `to`
+  for (std::size_t r = 0; r < dirty.size(); ++r) {
+    if (!pending[r]) continue;
+    pending[r] = 0;
+    int first = dirty[r][0], last = dirty[r][1];
+    const int A = int(apexes.size());
+    bool done = false;
+    for (int k = 1; A > 0 && !done;) {
+      // i1: the nearest apex at or before the range's first portal; i2: at or after its last (cyclic)
+      int i1 = 0, i2 = 0;
+      for (int i = 1; i < A; ++i) {
+        if (forward(apexes[i].portal, first) < forward(apexes[i1].portal, first)) i1 = i;
+        if (forward(last, apexes[i].portal) < forward(last, apexes[i2].portal)) i2 = i;
+      }
+      const int inner_span = ((i2 - i1) % A + A) % A;
+      if (inner_span + 2 * k >= A) break;  // the window would wrap round the loop
+      const Apex e1 = apexes[((i1 - k) % A + A) % A], e2 = apexes[(i2 + k) % A];
+      const int count = forward(e1.portal, e2.portal);
+      if (count == 0) break;
+      // A range still to be redone inside the window changes the path next to its ends: take it in.
+      bool absorbed = false;
+      for (std::size_t q = r + 1; q < dirty.size(); ++q)
+        if (pending[q] && forward(e1.portal, dirty[q][0]) < count) {
+          pending[q] = 0;
+          if (forward(e1.portal, dirty[q][0]) < forward(e1.portal, first)) first = dirty[q][0];
+          if (forward(e1.portal, dirty[q][1]) > forward(e1.portal, last)) last = dirty[q][1];
+          absorbed = true;
+        }
+      if (absorbed) continue;
+      const Apex in1 = apexes[((i1 - k + 1) % A + A) % A], in2 = apexes[(i2 + k - 1) % A];
+      // The funnel can list one vertex at two portals in a row (a bend of zero length between them): an
+      // inner apex at its window end's vertex checks nothing.
+      if (in1.vertex == e1.vertex || in2.vertex == e2.vertex) { ++k; continue; }
+      found.clear();
+      funnel_segment(S, e1.portal, count, s[e1.portal], s[e2.portal], s, found);
+      auto has = [&](const Apex& x) {
+        for (const Apex& f : found)
+          if (f.vertex == x.vertex) return true;
+        return false;
+      };
+      if (!has(in1) || !has(in2)) { ++k; continue; }
+      merged.clear();
+      for (const Apex& a : apexes) {
+        const int d = forward(e1.portal, a.portal);
+        if (d == 0 || d >= count) merged.push_back(a);
+      }
+      merged.insert(merged.end(), found.begin(), found.end());
+      std::sort(merged.begin(), merged.end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
+      apexes.swap(merged);
+      done = true;
+      ++refunnel_windows;
+    }
+    if (!done) {
+      ++refunnel_fallbacks;
+      return relax(S, 0, s, apexes);
+    }
+  }
+  return params_length(S, s);
+}
+
 std::vector<int> Shortener::other_fan(int v, int fa, int fb, int fa_next) const {
   // Start from the edge of fa at v that is NOT shared with fa_next.
   int hstart = -1;
@@ -313,7 +382,8 @@ bool Shortener::interior_vertex(int v) const {
   return true;
 }
 
-int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit) {
+int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit,
+                          std::vector<Apex>* kept, std::vector<std::array<int, 2>>* dirty) {
   const int m = int(S.size());
   struct Cand { double other; int a, len; std::vector<int> run; };
   std::vector<Cand> cands;
@@ -370,19 +440,32 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
   if (!chosen) return 0;
   std::vector<int> NS;
   std::vector<double> Ns;
+  // renumbered: the new index of each old portal that the swaps kept, else -1
+  std::vector<int> renumbered(kept ? m : 0, -1);
+  if (dirty) dirty->clear();
   for (int i = 0; i < m;) {
     int j = (first_end + i) % m;
     if (start_of[j] >= 0) {
       auto& c = cands[start_of[j]];
+      const int first = int(NS.size()) - 1;  // the old portal a-1, kept: a run never starts NS
       for (size_t k = 0; k < c.run.size(); ++k) NS.push_back(c.run[k]), Ns.push_back(0.5);
       Ns.back() = s[(c.a + c.len - 1) % m];  // portal after fb is the old portal b
+      if (kept) renumbered[(c.a + c.len - 1) % m] = int(NS.size()) - 1;
+      if (dirty) dirty->push_back({first, int(NS.size()) - 1});
       i += c.len;
     } else {
+      if (kept) renumbered[j] = int(NS.size());
       NS.push_back(S[j]), Ns.push_back(s[j]);
       ++i;
     }
   }
   if (!portals_ok(NS)) return 0;
+  if (kept) {
+    kept->clear();
+    for (const Apex& ap : apexes)
+      if (renumbered[ap.portal] >= 0) kept->push_back({renumbered[ap.portal], ap.vertex});
+    std::sort(kept->begin(), kept->end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
+  }
   S.swap(NS);
   s.swap(Ns);
   cut = 0;  // old portal first_end, crossing known

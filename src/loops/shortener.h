@@ -94,14 +94,26 @@ struct Shortener {
   bool fan(int a, int p, int b, bool left, std::vector<int>& out, double& angle) const;
   bool strip_from_edge_loop(const std::vector<int>& P, std::vector<int>& S) const;
   // Portal j: half-edge (in S[j+1]) whose twin lies in S[j]; left = its source, right = its target.
-  std::vector<int> portal_h;
   bool portals_ok(const std::vector<int>& S) const;
   int portal_of(int f, int g) const;
 
   // Funnel through the strip cut at portal c with the loop crossing it at parameter s_c. Fills s (per
-  // portal) and the apex list (portal index, mesh vertex). Returns the length.
+  // portal) and the apex list (portal index, mesh vertex), in portal order. Returns the length.
   struct Apex { int portal; int vertex; };
   double funnel(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
+  // The funnel from the crossing s_from of portal `from` to the crossing s_to of portal from + count
+  // (cyclic) through the faces between them: sets s of the portals strictly between and appends their
+  // apexes, in order. count = S.size() with s_to = s_from is the closed loop cut at `from`.
+  void funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to, std::vector<double>& s,
+                      std::vector<Apex>& apexes);
+  // After swaps, the funnel again only where the strip changed: `dirty` lists portal ranges [first, last]
+  // whose inner crossings are unknown; `apexes` (the old ones outside those ranges, in portal order)
+  // anchor each range's funnel between the apexes around it, widened until the apexes next to the range
+  // stay apexes (then the path outside is still the shortest, see shorten_strip.cpp). Falls back to
+  // relax() when a window would cover the loop. Returns the length.
+  double refunnel(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
+                  const std::vector<std::array<int, 2>>& dirty);
+  int refunnel_windows = 0, refunnel_fallbacks = 0;  // how refunnel went, for the tests
 
   P3 crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const;
   double params_length(const std::vector<int>& S, const std::vector<double>& s) const;
@@ -119,8 +131,11 @@ struct Shortener {
   bool interior_vertex(int v) const;
 
   // Side swaps at every apex whose angle on the far side is below pi, for non-overlapping runs at once
-  // (smallest far-side angle first). Returns the number of swaps made.
-  int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit);
+  // (smallest far-side angle first). Returns the number of swaps made. Optionally gives the apexes that
+  // the swaps left in place, renumbered for the new strip, and the portal ranges whose crossings the swaps
+  // made unknown (for refunnel).
+  int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit,
+                 std::vector<Apex>* kept = nullptr, std::vector<std::array<int, 2>>* dirty = nullptr);
 };
 
 }  // namespace chokeloops::shorten_detail

@@ -18,7 +18,9 @@
 //     smaller angle) is unfolded and the shortest path through it found by the funnel algorithm, closing
 //     the loop by alternating the cut portal; then wherever the loop bends around a vertex whose angle on
 //     the other side is below pi, the strip is moved to that side and the funnel rerun (iterative shortest
-//     path in a triangle strip). Every step is a homotopy inside the band, so the class is kept.
+//     path in a triangle strip). After each round of swaps the funnel is rerun only between the apexes
+//     around the swapped runs (widened until the apexes next to them stay apexes), and once over the whole
+//     strip at the end. Every step is a homotopy inside the band, so the class is kept.
 //     The funnel's lengths are checked against the polyline actually built from its portal crossings (the
 //     unfolded strip can overlap itself near tiny faces), and a final Gauss-Seidel pass moves each crossing
 //     to the best point of its portal (the length is convex in the crossing parameters).
