@@ -63,6 +63,28 @@ double max_distance_to_vertices_edges(const SurfaceMesh& m, const Polyline3& p) 
   }
   return worst;
 }
+// The vertices within max_k edge rings of the loop, with their ring and nearness (2 on the loop, 1 next to it),
+// as shorten_loop gathers them for the band.
+struct LoopRegion {
+  detail::FlatIntMap rid;
+  std::vector<int> region, ring;
+  std::vector<char> near;
+};
+LoopRegion loop_region(const SurfaceMesh& m, const MeshAdjacency& adj, const std::vector<int>& loop, int max_k) {
+  LoopRegion r;
+  std::vector<int> around;
+  for (int v : loop)
+    if (r.rid.emplace(v, int(r.region.size()))) r.region.push_back(v), r.ring.push_back(0);
+  for (std::size_t i = 0; i < r.region.size(); ++i) {
+    if (r.ring[i] >= max_k) continue;
+    adj.neighbours(m, r.region[i], around);
+    for (int w : around)
+      if (r.rid.emplace(w, int(r.region.size()))) r.region.push_back(w), r.ring.push_back(r.ring[i] + 1);
+  }
+  r.near.resize(r.region.size());
+  for (std::size_t i = 0; i < r.region.size(); ++i) r.near[i] = r.ring[i] == 0 ? 2 : r.ring[i] == 1 ? 1 : 0;
+  return r;
+}
 }  // namespace
 
 TEST(Shorten, WigglyMeridianBecomesGeodesicMeridian) {
@@ -237,18 +259,8 @@ TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
   auto adj = build_adjacency(m);
   auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
   const int max_k = 40;
-  detail::FlatIntMap rid;
-  std::vector<int> region, ring, around;
-  for (int v : loop)
-    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
-  for (std::size_t i = 0; i < region.size(); ++i) {
-    if (ring[i] >= max_k) continue;
-    adj.neighbours(m, region[i], around);
-    for (int w : around)
-      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
-  }
-  std::vector<char> near(region.size());
-  for (std::size_t i = 0; i < region.size(); ++i) near[i] = ring[i] == 0 ? 2 : ring[i] == 1 ? 1 : 0;
+  LoopRegion lr = loop_region(m, adj, loop, max_k);
+  const auto& [rid, region, ring, near] = lr;
   int annuli = 0, not_annuli = 0, touching_only = 0;
   for (int barred_every : {0, 7}) {
     std::vector<int> entry = ring;
@@ -305,19 +317,8 @@ TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
   auto adj = build_adjacency(m);
   auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, R, r, 0.3, 0.15, 7));
   const int max_k = 12;
-  detail::FlatIntMap rid;
-  std::vector<int> region, ring, around;
-  for (int v : loop)
-    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
-  for (std::size_t i = 0; i < region.size(); ++i) {
-    if (ring[i] >= max_k) continue;
-    adj.neighbours(m, region[i], around);
-    for (int w : around)
-      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
-  }
-  std::vector<char> near(region.size());
-  for (std::size_t i = 0; i < region.size(); ++i) near[i] = ring[i] == 0 ? 2 : ring[i] == 1 ? 1 : 0;
-  const auto candidates = shorten_detail::band_candidates(m, adj, region, rid, ring, near, max_k);
+  const LoopRegion lr = loop_region(m, adj, loop, max_k);
+  const auto candidates = shorten_detail::band_candidates(m, adj, lr.region, lr.rid, lr.ring, lr.near, max_k);
   shorten_detail::Shortener sh(m, adj);
   ASSERT_TRUE(sh.build_band(candidates, max_k, loop));
   std::vector<int> S;
