@@ -208,8 +208,6 @@ void Shortener::build_arcs() {
   std::stable_sort(all.begin(), all.end(), [](const Tagged& x, const Tagged& y) {
     return x.from != y.from ? x.from < y.from : x.arc.to != y.arc.to ? x.arc.to < y.arc.to : x.arc.sign < y.arc.sign;
   });
-  position.resize(band.global.size());
-  for (std::size_t v = 0; v < band.global.size(); ++v) position[v] = mesh.vertices[std::size_t(band.global[v])];
   arc_start.assign(band.global.size() + 1, 0);
   arcs.clear();
   for (std::size_t i = 0; i < all.size(); ++i) {
@@ -281,20 +279,14 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
   auto& q = scratch.queue;
   q.clear();
   const int src = s * NL + L0, dst = s * NL + L0 + band.winding;
-  // A*: the straight distance back to s (where the lift ends) is a lower bound of what is left, and a
-  // consistent one (edge lengths are straight distances), so the first pop of dst is the shortest; the
-  // search skips the band's far side and the vertices past half the loop on the way back.
-  const P3 target = position[std::size_t(s)];
-  auto estimate = [&](int v) { return dist3(position[std::size_t(v)], target); };
   d[src] = 0;
   touched.push_back(src);
-  heap_push(q, {estimate(s), src});
+  heap_push(q, {0, src});
   while (!q.empty()) {
-    const auto [key, node] = heap_pop(q);
-    const int v = node / NL, layer = node % NL;
-    const double dv = d[node];
-    if (key > dv + estimate(v)) continue;  // a stale entry: the node was reached shorter since
+    const auto [dv, node] = heap_pop(q);
+    if (dv > d[node]) continue;
     if (node == dst) break;
+    int v = node / NL, layer = node % NL;
     for (int i = arc_start[v]; i < arc_start[v + 1]; ++i) {
       int nl = layer + arcs[i].sign;
       if (nl < 0 || nl >= NL) continue;
@@ -303,7 +295,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length) const {
       if (nd < d[w]) {
         if (std::isinf(d[w])) touched.push_back(w);
         d[w] = nd, from[w] = node;
-        heap_push(q, {nd + estimate(arcs[i].to), w});
+        heap_push(q, {nd, w});
       }
     }
   }
