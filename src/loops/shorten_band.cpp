@@ -191,32 +191,44 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
 // ---- Step 2: shortest edge loop in the band ------------------------------------------------------
 
 void Shortener::build_arcs() {
-  // Both directions of every half-edge of the band, then each vertex's arcs by (target, sign) with the
-  // repeats (an inner edge is seen from both its faces) dropped: one flat sort, no list per vertex.
-  struct Tagged { int from; Arc arc; };
-  std::vector<Tagged> all;
-  all.reserve(band.faces.size() * 6);
+  // Both directions of every edge of the band (an inner edge once, from the half-edge of its pair that
+  // comes first), bucketed by their source vertex, then each vertex's few arcs by (target, sign) with
+  // repeats (edges of more than two faces) dropped: the arcs a sort of all of them gave, for a counting pass.
+  struct Half { int from; Arc arc; };
+  std::vector<Half> all;
+  all.reserve(band.faces.size() * 3 + 16);
   for (int f : band.faces)
     for (int k = 0; k < 3; ++k) {
-      int h = 3 * f + k;
-      int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
-      double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
-      int s = hsign(h);
-      all.push_back({a, {L, c, s}});
-      all.push_back({c, {L, a, -s}});
+      const int h = 3 * f + k, t = adj.twin[std::size_t(h)];
+      if (t >= 0 && t < h && face_in(t / 3)) continue;
+      const int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
+      const double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
+      const int sg = hsign(h);
+      all.push_back({a, {L, c, sg}});
+      all.push_back({c, {L, a, -sg}});
     }
-  std::stable_sort(all.begin(), all.end(), [](const Tagged& x, const Tagged& y) {
-    return x.from != y.from ? x.from < y.from : x.arc.to != y.arc.to ? x.arc.to < y.arc.to : x.arc.sign < y.arc.sign;
-  });
-  arc_start.assign(band.global.size() + 1, 0);
-  arcs.clear();
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    const Tagged& t = all[i];
-    if (i > 0 && all[i - 1].from == t.from && all[i - 1].arc.to == t.arc.to && all[i - 1].arc.sign == t.arc.sign) continue;
-    arcs.push_back(t.arc);
-    ++arc_start[std::size_t(t.from) + 1];
+  const std::size_t nv = band.global.size();
+  std::vector<int> fill(nv + 1, 0);
+  for (const Half& x : all) ++fill[std::size_t(x.from) + 1];
+  for (std::size_t v = 0; v < nv; ++v) fill[v + 1] += fill[v];
+  std::vector<Arc> bucketed(all.size());
+  {
+    std::vector<int> next(fill.begin(), fill.end() - 1);
+    for (const Half& x : all) bucketed[std::size_t(next[std::size_t(x.from)]++)] = x.arc;
   }
-  for (std::size_t v = 0; v < band.global.size(); ++v) arc_start[v + 1] += arc_start[v];
+  auto before = [](const Arc& x, const Arc& y) { return x.to != y.to ? x.to < y.to : x.sign < y.sign; };
+  arc_start.assign(nv + 1, 0);
+  arcs.clear();
+  arcs.reserve(bucketed.size());
+  for (std::size_t v = 0; v < nv; ++v) {
+    Arc* b = bucketed.data() + fill[v];
+    Arc* e = bucketed.data() + fill[v + 1];
+    for (Arc* i = b + 1; i < e; ++i)  // insertion sort: a vertex has a handful of arcs
+      for (Arc* j = i; j > b && before(*j, *(j - 1)); --j) std::swap(*j, *(j - 1));
+    for (Arc* i = b; i < e; ++i)
+      if (i == b || before(*(i - 1), *i)) arcs.push_back(*i);
+    arc_start[v + 1] = int(arcs.size());
+  }
 }
 
 namespace {
