@@ -3,6 +3,8 @@
 #include "chokeloops/loops/shorten.h"
 
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -20,6 +22,24 @@ namespace chokeloops {
 using shorten_detail::dist3;
 using shorten_detail::Shortener;
 
+namespace {
+// With CHOKELOOPS_DEBUG_SHORTEN=1 each call that reaches the funnel also prints how long its steps took, so
+// that where the shortening goes can be summed over a run (bands, searches, swaps, ...).
+struct StepClock {
+  enum Step { kRegion, kCandidates, kBands, kArcs, kSearches, kSwaps, kPolish, kSteps };
+  bool on;
+  std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+  std::array<double, kSteps> ms{};
+  explicit StepClock(bool enabled) : on(enabled) {}
+  void lap(Step step) {
+    if (!on) return;
+    const auto now = std::chrono::steady_clock::now();
+    ms[step] += std::chrono::duration<double, std::milli>(now - last).count();
+    last = now;
+  }
+};
+}  // namespace
+
 ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
                            const ShortenOptions& opt) {
   ShortenResult R;
@@ -35,6 +55,8 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   R.input_length = R.edge_path_length = R.length = closed_length(R.points);
   if (loop.size() < 3) return R;
 
+  const bool debug = std::getenv("CHOKELOOPS_DEBUG_SHORTEN") != nullptr;
+  StepClock clock(debug);
   // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded; all per-vertex
   // data lives on this region so that the cost follows the band, not the mesh.
   const int max_rings = std::max(1, opt.max_rings);
@@ -75,6 +97,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   for (size_t i = 0; i < region.size(); ++i)
     if (ring[i] <= 1) near_loop[i] = ring[i] == 0 ? 2 : 1;
 
+  clock.lap(StepClock::kRegion);
   Shortener sh(mesh, adj);
   std::vector<int> entry(region.size());
   for (size_t i = 0; i < region.size(); ++i)
@@ -84,6 +107,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   // band, and every band is taken from the one list of candidate faces.
   const shorten_detail::BandCandidates candidates =
       shorten_detail::band_candidates(mesh, adj, region, rid, entry, near_loop, max_rings);
+  clock.lap(StepClock::kCandidates);
   auto try_rings = [&](int k) {
     return candidates.euler[std::size_t(k)] == 0 && sh.build_band(candidates, k, loop);
   };
@@ -111,7 +135,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   if (!rings) return R;
 
   // Step 2.
+  clock.lap(StepClock::kBands);
   sh.build_arcs();
+  clock.lap(StepClock::kArcs);
   // Every loop of the class crosses the cut, so loops through vertices sampled along the cut (which runs
   // across the band) find the best place in the band; then loops through the midpoint of the best one.
   std::vector<int> best;
@@ -161,16 +187,17 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   R.length = closed_length(R.points);
 
   // Step 3.
+  clock.lap(StepClock::kSearches);
   std::vector<int> S;
   if (!sh.strip_from_edge_loop(best, S)) {
-    if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN")) std::fprintf(stderr, "no triangle strip around the edge loop\n");
+    if (debug) std::fprintf(stderr, "no triangle strip around the edge loop\n");
     return R;
   }
   std::vector<double> sp(S.size(), 0.5);
   std::vector<Shortener::Apex> apexes;
   int cut = 0;
   double L = sh.relax(S, cut, sp, apexes);
-  int flat_rounds = 0;
+  int flat_rounds = 0, rounds = 0;
   for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
     std::vector<int> S2 = S;
     std::vector<double> s2 = sp;
@@ -187,22 +214,31 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       if (!n) break;
       L2 = sh.refunnel(S2, s2, ap2, dirty);
     }
-    if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
+    if (debug)
       std::fprintf(stderr, "swap round %d: %d swaps, %.9f -> %.9f (strip %zu)\n", it, n, L, L2, S2.size());
     if (!(L2 < L + 1e-9 * L)) break;  // a swap below pi shortens; allow relaxation noise only
     if (!(L2 < L - 1e-12 * L) && ++flat_rounds > 3) break;
     S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = std::min(L, L2);
     R.swaps += n;
+    ++rounds;
   }
   // The windows kept every crossing but the one the first funnel was cut at; a funnel over the whole
   // strip settles that one too.
   if (R.swaps > 0) L = sh.relax(S, 0, sp, apexes);
+  clock.lap(StepClock::kSwaps);
   sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
   double Lp = closed_length(pts);
-  if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
+  clock.lap(StepClock::kPolish);
+  if (debug) {
     std::fprintf(stderr, "edge loop %.9f (%zu vertices), strip %zu faces, relaxed %.9f, polished %.9f\n", R.length,
                  best.size(), S.size(), L, Lp);
+    const auto& t = clock.ms;
+    std::fprintf(stderr,
+                 "shorten steps ms: region %.3f candidates %.3f bands %.3f arcs %.3f searches %.3f swaps %.3f (%d rounds) "
+                 "polish %.3f\n",
+                 t[0], t[1], t[2], t[3], t[4], t[5], rounds, t[6]);
+  }
   if (pts.size() >= 3 && Lp <= R.length) {
     R.points = pts;
     R.length = Lp;
