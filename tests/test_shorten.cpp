@@ -333,8 +333,7 @@ TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
     std::vector<double> s2 = s;
     std::vector<shorten_detail::Shortener::Apex> kept, whole_apexes;
     std::vector<std::array<int, 2>> dirty;
-    int cut = 0;
-    if (!sh.swap_batch(S2, s2, apexes, cut, 1 << 30, &kept, &dirty)) break;
+    if (!sh.swap_batch(S2, s2, apexes, 1 << 30, kept, dirty)) break;
     std::vector<double> whole = s2;
     const double L_whole = sh.relax(S2, 0, whole, whole_apexes);
     const double L_windows = sh.refunnel(S2, s2, kept, dirty);

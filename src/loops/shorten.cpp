@@ -195,22 +195,20 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   }
   std::vector<double> sp(S.size(), 0.5);
   std::vector<Shortener::Apex> apexes;
-  int cut = 0;
-  double L = sh.relax(S, cut, sp, apexes);
+  double L = sh.relax(S, 0, sp, apexes);
   int flat_rounds = 0, rounds = 0;
   for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
     std::vector<int> S2 = S;
     std::vector<double> s2 = sp;
-    int c2 = 0;
     std::vector<Shortener::Apex> ap2;
     std::vector<std::array<int, 2>> dirty;
-    int n = sh.swap_batch(S2, s2, apexes, c2, 1 << 30, &ap2, &dirty);
+    int n = sh.swap_batch(S2, s2, apexes, 1 << 30, ap2, dirty);
     if (!n) break;
     // Only the funnel between the apexes around each swap is run again (a round costs what it changes).
     double L2 = sh.refunnel(S2, s2, ap2, dirty);
     if (!(L2 < L - 1e-12 * L) && n > 1) {  // the batch did not help: the single best swap alone
-      S2 = S, s2 = sp, c2 = 0;
-      n = sh.swap_batch(S2, s2, apexes, c2, 1, &ap2, &dirty);
+      S2 = S, s2 = sp;
+      n = sh.swap_batch(S2, s2, apexes, 1, ap2, dirty);
       if (!n) break;
       L2 = sh.refunnel(S2, s2, ap2, dirty);
     }

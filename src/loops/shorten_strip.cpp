@@ -382,8 +382,8 @@ bool Shortener::interior_vertex(int v) const {
   return true;
 }
 
-int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit,
-                          std::vector<Apex>* kept, std::vector<std::array<int, 2>>* dirty) {
+int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int limit,
+                          std::vector<Apex>& kept, std::vector<std::array<int, 2>>& dirty) {
   const int m = int(S.size());
   struct Cand { double other; int a, len; std::vector<int> run; };
   std::vector<Cand> cands;
@@ -441,8 +441,8 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
   std::vector<int> NS;
   std::vector<double> Ns;
   // renumbered: the new index of each old portal that the swaps kept, else -1
-  std::vector<int> renumbered(kept ? m : 0, -1);
-  if (dirty) dirty->clear();
+  std::vector<int> renumbered(m, -1);
+  dirty.clear();
   for (int i = 0; i < m;) {
     int j = (first_end + i) % m;
     if (start_of[j] >= 0) {
@@ -450,25 +450,22 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
       const int first = int(NS.size()) - 1;  // the old portal a-1, kept: a run never starts NS
       for (size_t k = 0; k < c.run.size(); ++k) NS.push_back(c.run[k]), Ns.push_back(0.5);
       Ns.back() = s[(c.a + c.len - 1) % m];  // portal after fb is the old portal b
-      if (kept) renumbered[(c.a + c.len - 1) % m] = int(NS.size()) - 1;
-      if (dirty) dirty->push_back({first, int(NS.size()) - 1});
+      renumbered[(c.a + c.len - 1) % m] = int(NS.size()) - 1;
+      dirty.push_back({first, int(NS.size()) - 1});
       i += c.len;
     } else {
-      if (kept) renumbered[j] = int(NS.size());
+      renumbered[j] = int(NS.size());
       NS.push_back(S[j]), Ns.push_back(s[j]);
       ++i;
     }
   }
   if (!portals_ok(NS)) return 0;
-  if (kept) {
-    kept->clear();
-    for (const Apex& ap : apexes)
-      if (renumbered[ap.portal] >= 0) kept->push_back({renumbered[ap.portal], ap.vertex});
-    std::sort(kept->begin(), kept->end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
-  }
+  kept.clear();
+  for (const Apex& ap : apexes)
+    if (renumbered[ap.portal] >= 0) kept.push_back({renumbered[ap.portal], ap.vertex});
+  std::sort(kept.begin(), kept.end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
   S.swap(NS);
   s.swap(Ns);
-  cut = 0;  // old portal first_end, crossing known
   return chosen;
 }
 

@@ -98,7 +98,7 @@ struct Shortener {
   int portal_of(int f, int g) const;
 
   // Funnel through the strip cut at portal c with the loop crossing it at parameter s_c. Fills s (per
-  // portal) and the apex list (portal index, mesh vertex), in portal order. Returns the length.
+  // portal) and the apex list (portal index, mesh vertex), in order along the loop from c. Returns the length.
   struct Apex { int portal; int vertex; };
   double funnel(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
   // The funnel from the crossing s_from of portal `from` to the crossing s_to of portal from + count
@@ -131,11 +131,11 @@ struct Shortener {
   bool interior_vertex(int v) const;
 
   // Side swaps at every apex whose angle on the far side is below pi, for non-overlapping runs at once
-  // (smallest far-side angle first). Returns the number of swaps made. Optionally gives the apexes that
-  // the swaps left in place, renumbered for the new strip, and the portal ranges whose crossings the swaps
-  // made unknown (for refunnel).
-  int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int& cut, int limit,
-                 std::vector<Apex>* kept = nullptr, std::vector<std::array<int, 2>>* dirty = nullptr);
+  // (smallest far-side angle first). Returns the number of swaps made. Gives the apexes that the swaps left
+  // in place, renumbered for the new strip and in portal order, and the portal ranges whose crossings the
+  // swaps made unknown (for refunnel).
+  int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int limit,
+                 std::vector<Apex>& kept, std::vector<std::array<int, 2>>& dirty);
 };
 
 }  // namespace chokeloops::shorten_detail
