@@ -330,7 +330,7 @@ Id Engine::last_tet(Id m) const {
   return cx_.tet_id(m, best[0], best[1], best[2]);
 }
 
-void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out, RootCache& roots) const {
+int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, RootCache& roots) const {
   std::uint16_t lower, outside;
   masks(s, lower, outside);
   std::uint16_t upper = std::uint16_t(~lower & 0x3FFF);
@@ -338,14 +338,14 @@ void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTria
   std::array<int, 14> comp_of;
   comp_of.fill(-1);
   std::array<std::uint32_t, 7> rep{};
-  std::array<std::int64_t, 7> lobe{};
+  std::array<std::int8_t, 7> lobe{};
   for (int c = 0; c < ucomps.count; ++c) {
     for (unsigned m = ucomps.masks[c]; m; m &= m - 1) comp_of[__builtin_ctz(m)] = c;
     rep[c] = (ucomps.masks[c] & outside)
                  ? kOutside
                  : maximum_index_(walk<false>(s + delta_[__builtin_ctz(ucomps.masks[c])], roots));
     unsigned in_box = ucomps.masks[c] & ~outside;
-    lobe[c] = in_box ? s + delta_[__builtin_ctz(in_box)] : -2;
+    lobe[c] = in_box ? std::int8_t(__builtin_ctz(in_box)) : std::int8_t(-1);
   }
   // Only the star's triangles (link edges) can join nodes: a tetrahedron is born as its own node. In reverse
   // filtration order they are (order[i], order[j]) for i descending, then j < i descending.
@@ -361,6 +361,7 @@ void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTria
     return tri;
   };
   auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
+  int written = 0;
   for (int i = n_lower - 1; i > 0; --i)
     for (int j = i - 1; j >= 0; --j) {
       if (!(link_.adjacency[order[i]] >> order[j] & 1)) continue;
@@ -369,48 +370,75 @@ void Engine::split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTria
       int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
       if (r1 == r2) continue;
       if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
-        out.push_back({s, std::uint8_t(link_.edges[e][0]), std::uint8_t(link_.edges[e][1]), rep[comp_rep[r1]],
-                       rep[comp_rep[r2]], lobe[comp_rep[r1]], lobe[comp_rep[r2]]});
+        out[written++] = {s, std::uint8_t(link_.edges[e][0]), std::uint8_t(link_.edges[e][1]), lobe[comp_rep[r1]],
+                          lobe[comp_rep[r2]], rep[comp_rep[r1]], rep[comp_rep[r2]]};
       parent[r2] = r1;
       if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
     }
+  return written;
 }
 
 void Engine::dim2(PersistenceDiagram& out) {
-  // Cross triangles of all split saddles, computed in parallel, kept in saddle order.
-  const std::size_t chunk = 4096, nchunks = (splits_.size() + chunk - 1) / chunk;
-  std::vector<std::vector<CrossTriangle>> found(nchunks);
-  tbb::enumerable_thread_specific<RootCache> caches;
-  tbb::parallel_for(std::size_t(0), nchunks, [&](std::size_t c) {
-    RootCache& roots = caches.local();
-    for (std::size_t i = c * chunk; i < std::min(splits_.size(), (c + 1) * chunk); ++i)
-      split_saddle_cross_triangles(splits_[i], found[c], roots);
+  // Cross triangles of all split saddles, computed in parallel, kept in saddle order. The saddles are visited
+  // in grid order, each writing to its own place: in filtration order they are scattered over the grid, and
+  // reading their stars and walks cost more than the replays. A saddle has one cross triangle per extra
+  // upper-link component, so the places are known from the masks alone.
+  const std::size_t S = splits_.size();
+  std::vector<std::uint32_t> by_vertex(S);
+  for (std::size_t i = 0; i < S; ++i) by_vertex[i] = std::uint32_t(i);
+  tbb::parallel_sort(by_vertex.begin(), by_vertex.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return splits_[a] < splits_[b]; });
+  std::vector<std::uint32_t> place(S + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, S, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t i = by_vertex[k];
+      std::uint16_t lower, outside;
+      masks(splits_[i], lower, outside);
+      place[i + 1] = table_[std::uint16_t(~lower & 0x3FFF)].count - 1u;
+    }
   });
+  for (std::size_t i = 0; i < S; ++i) place[i + 1] += place[i];
+  std::vector<CrossTriangle> cross(place[S]);
+  tbb::enumerable_thread_specific<RootCache> caches;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, S, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    RootCache& roots = caches.local();
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::uint32_t i = by_vertex[k];
+      if (split_saddle_cross_triangles(splits_[i], cross.data() + place[i], roots) != int(place[i + 1] - place[i]))
+        throw InternalError("a split saddle's star has fewer cross triangles than upper-link components");
+    }
+  });
+  std::vector<std::uint32_t>().swap(by_vertex);
+  std::vector<std::uint32_t>().swap(place);
   std::vector<std::uint32_t> parent(maxima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-  for (auto& list : found)
-    for (const CrossTriangle& ct : list) {
-      std::uint32_t g1 = find(parent, ct.rep1), g2 = find(parent, ct.rep2);
-      Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
-      if (g1 == g2) {
-        deaths1_.push_back({cx_.triangle_id(s, a, b), {std::int32_t(ct.lobe1), std::int32_t(ct.lobe2)}});
-        continue;
-      }
-      bool g1_younger = g2 == kOutside || (g1 != kOutside && less(maxima_list_[g1], maxima_list_[g2]));
-      std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
-      parent[young] = old;
-      const Id young_vertex = maxima_list_[young];
-      PersistencePair p;
-      p.dim = 2;
-      p.birth = f_[s];
-      p.death = f_[young_vertex];
-      p.birth_simplex = cx_.triangle_id(s, a, b);
-      p.birth_vertex = s;
-      p.death_simplex = last_tet(young_vertex);
-      p.death_vertex = young_vertex;
-      p.birth_lobes = {ct.lobe1, ct.lobe2};
-      out.pairs.push_back(p);
+  const std::size_t first = out.pairs.size();
+  for (const CrossTriangle& ct : cross) {
+    std::uint32_t g1 = find(parent, ct.rep1), g2 = find(parent, ct.rep2);
+    Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
+    if (g1 == g2) {
+      deaths1_.push_back({cx_.triangle_id(s, a, b),
+                        {std::int32_t(lobe_vertex(ct.s, ct.lobe1)), std::int32_t(lobe_vertex(ct.s, ct.lobe2))}});
+      continue;
     }
+    bool g1_younger = g2 == kOutside || (g1 != kOutside && less(maxima_list_[g1], maxima_list_[g2]));
+    std::uint32_t young = g1_younger ? g1 : g2, old = g1_younger ? g2 : g1;
+    parent[young] = old;
+    const Id young_vertex = maxima_list_[young];
+    PersistencePair p;
+    p.dim = 2;
+    p.birth = f_[s];
+    p.death = f_[young_vertex];
+    p.birth_simplex = cx_.triangle_id(s, a, b);
+    p.birth_vertex = s;
+    p.death_vertex = young_vertex;
+    p.birth_lobes = {lobe_vertex(ct.s, ct.lobe1), lobe_vertex(ct.s, ct.lobe2)};
+    out.pairs.push_back(p);
+  }
+  // each maximum's last tetrahedron sorts its star's 24 triangles: in parallel, after the merges
+  tbb::parallel_for(first, out.pairs.size(), [&](std::size_t i) {
+    out.pairs[i].death_simplex = last_tet(out.pairs[i].death_vertex);
+  });
   std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
   deaths1_.shrink_to_fit();  // kept through the parallel pass of dim 1
 }

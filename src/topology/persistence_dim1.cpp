@@ -349,13 +349,17 @@ void Engine::dim1(PersistenceDiagram& out) {
       }
     }
     owner[r] = i;
-    const EdgeKey p = birth_edge(r);
+    out.pairs[base + i].birth_simplex = Id(r);  // the rank, until the parallel pass below
+  }
+  // the birth half of each pair from its rank: a search of the birth list and the saddle's lower link each
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     PersistencePair& pr = out.pairs[base + i];
+    const EdgeKey p = birth_edge(std::uint32_t(pr.birth_simplex));
     pr.birth = f_[p.hi];
     pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
     pr.birth_vertex = p.hi;
     pr.birth_lobes = {p.hi + delta_[lowest_slot(p.hi)], p.lo};
-  }
+  });
 }
 
 }  // namespace chokeloops::detail

@@ -193,12 +193,15 @@ class Engine {
   // A triangle of a split saddle's lower star that joins two upper-link components: it either gives
   // birth to a void (the components' maxima differ) or kills a 1-cycle. rep = each component's maximum
   // (its index in maxima_list_) or kOutside.
-  // lobe = an in-box vertex of each component (-2 if the component lies wholly outside the box).
-  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::uint32_t rep1, rep2; std::int64_t lobe1, lobe2; };
+  // lobe = the link slot of an in-box vertex of each component (-1 if the component lies wholly outside the
+  // box). 16 bytes: there is one per extra upper-link component of every split saddle.
+  struct CrossTriangle { std::uint32_t s; std::uint8_t a, b; std::int8_t lobe1, lobe2; std::uint32_t rep1, rep2; };
+  Id lobe_vertex(std::uint32_t s, std::int8_t lobe) const { return lobe < 0 ? Id(-2) : Id(s) + delta_[lobe]; }
 
   // Replays the lower star of split saddle s on the dual graph, in reverse filtration order, with each
-  // upper-link component as one old node; needs no global state, so all saddles run in parallel.
-  void split_saddle_cross_triangles(std::uint32_t s, std::vector<CrossTriangle>& out, RootCache& roots) const;
+  // upper-link component as one old node; needs no global state, so all saddles run in parallel. Writes
+  // one cross triangle per extra upper-link component to `out`; returns how many.
+  int split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, RootCache& roots) const;
 
   void dim2(PersistenceDiagram& out);
 
