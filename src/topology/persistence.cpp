@@ -222,15 +222,20 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   const std::size_t pairs = minima - 1 + extra_upper_;
   // The peak is that of dim 0, dim 2 or dim 1, from the arrays each holds (bytes per item): the field and the
   // steps (4 + 1 a vertex), a bit a vertex for the saddles with births, the extrema's lists and their bucket
-  // indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far; in dim 2 the cross triangles and
-  // the dim-1 deaths (16), the birth slots of the join saddles (~18 with their hash entry); then the field,
-  // the whole diagram and per dim-1 death its grid order, column place, ~3 ranks, owner and pool share (36).
+  // indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far, the birth slots of the join saddles
+  // (~18 with their hash entry); while a dimension's saddles are visited in grid order, their visit order and
+  // two places (16) and each record twice (dim 0: a lobe and its minimum, 8; dim 2: a cross triangle, 16); at
+  // the end of dim 2 the cross triangles and the dim-1 deaths (8); then the field, the whole diagram and per
+  // dim-1 death its Z-order key, column place, ~3 ranks, owner and pool share (36).
   const std::size_t V = std::size_t(V_), bits = V / 8, birth_slots = joins_.size() * 18;
   const std::size_t pair = sizeof(PersistencePair), extrema = std::size_t(minima_ + maxima_) * 12;
   const std::size_t classify = V * 5 + extrema + (joins_.size() + splits_.size()) * 4;
-  const std::size_t dim0 = classify + bits + std::size_t(minima_) * 4 + (minima - 1) * pair + birth_slots;
-  const std::size_t dim2 = V * 5 + bits + std::size_t(maxima_) * 8 + splits_.size() * 4 +
-                           extra_upper_ * sizeof(CrossTriangle) + (pairs - births1) * pair + births1 * 16 + birth_slots;
+  const std::size_t lobes = (joins_.size() + extra_lower_) * 8 * 2 + joins_.size() * 16;
+  const std::size_t dim0 = classify + bits + std::size_t(minima_) * 4 + (minima - 1) * pair + birth_slots + lobes;
+  const std::size_t cross = extra_upper_ * sizeof(CrossTriangle);
+  const std::size_t dim2 = V * 5 + bits + std::size_t(maxima_) * 8 + splits_.size() * 4 + birth_slots +
+                           (minima - 1) * pair +
+                           std::max(cross * 2 + splits_.size() * 16, cross + (pairs - births1) * pair + births1 * 8);
   const std::size_t dim1 = V * 4 + bits + pairs * pair + births1 * 36 + birth_slots;
   const std::size_t need = std::max({dim0, dim2, dim1}) + (std::size_t(32) << 20);
   out.stats.estimated_bytes = need;
@@ -250,62 +255,66 @@ void Engine::dim0(PersistenceDiagram& out) {
   std::vector<std::uint32_t> parent(minima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   // Per join saddle, its lobes (the lowest vertex of each lower-link component, in filtration order) and the
-  // minima their descents reach: found in parallel a block at a time, merged in filtration order.
-  struct Lobes { std::array<std::uint32_t, 7> low, root; int count; };
-  const std::size_t block = std::size_t(1) << 15;
-  tbb::enumerable_thread_specific<RootCache> caches;
-  std::vector<Lobes> lobes(std::min(block, joins_.size()));
-  for (std::size_t first = 0; first < joins_.size(); first += block) {
-    const std::size_t n = std::min(block, joins_.size() - first);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const Id s = joins_[first + i];
+  // minima their descents reach, found in parallel with the saddles in grid order (in filtration order they
+  // are scattered over the grid), each written to its own place; merged in filtration order.
+  const std::size_t J = joins_.size();
+  auto lap = step_timer();
+  struct Lobe { std::uint32_t low, root; };
+  std::vector<std::uint32_t> place;
+  const std::vector<Lobe> lobes = records_in_grid_order<Lobe>(
+      joins_,
+      [&](std::uint32_t s) {
+        std::uint16_t lower, outside;
+        masks(s, lower, outside);
+        return table_[lower].count;
+      },
+      [&](std::uint32_t s, Lobe* L, int count, RootCache& roots) {
         std::uint16_t lower, outside;
         masks(s, lower, outside);
         const auto& comps = table_[lower];
-        Lobes& L = lobes[i];
-        L.count = comps.count;
-        for (int c = 0; c < comps.count; ++c) {
+        for (int c = 0; c < count; ++c) {
           Id best = -1;
           for (unsigned m = comps.masks[c]; m; m &= m - 1) {
-            Id u = s + delta_[__builtin_ctz(m)];
+            Id u = Id(s) + delta_[__builtin_ctz(m)];
             if (best < 0 || less(u, best)) best = u;
           }
-          L.low[c] = std::uint32_t(best);
+          L[c].low = std::uint32_t(best);
         }
-        std::sort(L.low.begin(), L.low.begin() + comps.count, [this](std::uint32_t a, std::uint32_t b) { return less(a, b); });
-        RootCache& roots = caches.local();
-        for (int c = 0; c < comps.count; ++c) L.root[c] = minimum_index_(walk<true>(L.low[c], roots));
+        std::sort(L, L + count, [this](const Lobe& a, const Lobe& b) { return less(a.low, b.low); });
+        for (int c = 0; c < count; ++c) L[c].root = minimum_index_(walk<true>(L[c].low, roots));
+      },
+      place);
+  lap("dim 0: lobes and minima (parallel)");
+  for (std::size_t i = 0; i < J; ++i) {
+    const std::uint32_t s = joins_[i];
+    const Lobe* L = lobes.data() + place[i];
+    const int count = int(place[i + 1] - place[i]);
+    BirthSlots births{s, 0, std::uint32_t(births1_)};
+    for (int c = 1; c < count; ++c) {
+      std::uint32_t rs = find(parent, L[0].root), r = find(parent, L[c].root);
+      if (r == rs) {
+        births.mask |= std::uint16_t(1u << slot(s, L[c].low));
+        ++births1_;
+        continue;
       }
-    });
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t s = joins_[first + i];
-      const Lobes& L = lobes[i];
-      BirthSlots births{s, 0, std::uint32_t(births1_)};
-      for (int c = 1; c < L.count; ++c) {
-        std::uint32_t rs = find(parent, L.root[0]), r = find(parent, L.root[c]);
-        if (r == rs) {
-          births.mask |= std::uint16_t(1u << slot(s, L.low[c]));
-          ++births1_;
-          continue;
-        }
-        std::uint32_t young = less(minima_list_[r], minima_list_[rs]) ? rs : r, old = young == r ? rs : r;
-        parent[young] = old;
-        const Id young_vertex = minima_list_[young];
-        PersistencePair p;
-        p.dim = 0;
-        p.birth = f_[young_vertex];
-        p.death = f_[s];
-        p.birth_simplex = p.birth_vertex = young_vertex;
-        p.death_simplex = cx_.edge_id(s, L.low[c]);
-        p.death_vertex = s;
-        p.death_lobes = {L.low[0], L.low[c]};
-        out.pairs.push_back(p);
-      }
-      if (births.mask) birth_list_.push_back(births);
+      std::uint32_t young = less(minima_list_[r], minima_list_[rs]) ? rs : r, old = young == r ? rs : r;
+      parent[young] = old;
+      const Id young_vertex = minima_list_[young];
+      PersistencePair p;
+      p.dim = 0;
+      p.birth = f_[young_vertex];
+      p.death = f_[s];
+      p.birth_simplex = p.birth_vertex = young_vertex;
+      p.death_simplex = cx_.edge_id(s, L[c].low);
+      p.death_vertex = s;
+      p.death_lobes = {L[0].low, L[c].low};
+      out.pairs.push_back(p);
     }
+    if (births.mask) birth_list_.push_back(births);
   }
+  lap("dim 0: merges (sequential)");
   index_birth_list();
+  lap("dim 0: birth index");
 }
 
 void Engine::index_birth_list() {
@@ -322,12 +331,23 @@ void Engine::index_birth_list() {
 }
 
 Id Engine::last_tet(Id m) const {
-  std::array<Id, 3> best{-1, -1, -1};
+  // A maximum is inside the box and above its 14 neighbours; its star's tetrahedra come in the order of their
+  // other three vertices, highest first: with the neighbours ranked once, a triangle's key is its ranks.
+  std::array<int, 14> order;
+  const int n = lower_slots_in_order(m, 0x3FFF, order);
+  std::array<unsigned, 14> rank{};
+  for (int i = 0; i < n; ++i) rank[order[i]] = unsigned(i);
+  unsigned best_key = 0;
+  const std::array<int, 3>* best = &link_.triangles[0];
   for (auto& tr : link_.triangles) {
-    auto d = sorted_descending(f_, std::array<Id, 3>{m + delta_[tr[0]], m + delta_[tr[1]], m + delta_[tr[2]]});
-    if (best[0] < 0 || simplex_less(f_, best, d)) best = d;
+    unsigned r0 = rank[tr[0]], r1 = rank[tr[1]], r2 = rank[tr[2]];
+    if (r0 < r1) std::swap(r0, r1);
+    if (r1 < r2) std::swap(r1, r2);
+    if (r0 < r1) std::swap(r0, r1);
+    const unsigned key = r0 << 8 | r1 << 4 | r2;
+    if (key > best_key) best_key = key, best = &tr;
   }
-  return cx_.tet_id(m, best[0], best[1], best[2]);
+  return cx_.tet_id(m, m + delta_[(*best)[0]], m + delta_[(*best)[1]], m + delta_[(*best)[2]]);
 }
 
 int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, RootCache& roots) const {
@@ -362,9 +382,17 @@ int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, Ro
   };
   auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
   int written = 0;
-  for (int i = n_lower - 1; i > 0; --i)
-    for (int j = i - 1; j >= 0; --j) {
-      if (!(link_.adjacency[order[i]] >> order[j] & 1)) continue;
+  std::array<std::int8_t, 14> rank;
+  for (int i = 0; i < n_lower; ++i) rank[order[i]] = std::int8_t(i);
+  for (int i = n_lower - 1; i > 0; --i) {
+    // as in compute_lower_link: the earlier lower neighbours of order[i] as a mask of ranks, latest first
+    unsigned earlier = 0;
+    for (unsigned m = link_.adjacency[order[i]] & lower; m; m &= m - 1) {
+      const int r = rank[__builtin_ctz(m)];
+      if (r < i) earlier |= 1u << r;
+    }
+    for (; earlier; earlier &= ~(1u << (31 - __builtin_clz(earlier)))) {
+      const int j = 31 - __builtin_clz(earlier);
       const int e = link_edge_index_[order[i]][order[j]];
       const auto& et = link_.edge_triangles[e];
       int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
@@ -375,41 +403,30 @@ int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, Ro
       parent[r2] = r1;
       if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
     }
+  }
   return written;
 }
 
 void Engine::dim2(PersistenceDiagram& out) {
-  // Cross triangles of all split saddles, computed in parallel, kept in saddle order. The saddles are visited
-  // in grid order, each writing to its own place: in filtration order they are scattered over the grid, and
-  // reading their stars and walks cost more than the replays. A saddle has one cross triangle per extra
+  auto lap = step_timer();
+  // Cross triangles of all split saddles, computed in parallel, kept in saddle order: as in dim 0, the saddles
+  // are visited in grid order, each writing to its own place. A saddle has one cross triangle per extra
   // upper-link component, so the places are known from the masks alone.
-  const std::size_t S = splits_.size();
-  std::vector<std::uint32_t> by_vertex(S);
-  for (std::size_t i = 0; i < S; ++i) by_vertex[i] = std::uint32_t(i);
-  tbb::parallel_sort(by_vertex.begin(), by_vertex.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return splits_[a] < splits_[b]; });
-  std::vector<std::uint32_t> place(S + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, S, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t k = r.begin(); k != r.end(); ++k) {
-      const std::uint32_t i = by_vertex[k];
-      std::uint16_t lower, outside;
-      masks(splits_[i], lower, outside);
-      place[i + 1] = table_[std::uint16_t(~lower & 0x3FFF)].count - 1u;
-    }
-  });
-  for (std::size_t i = 0; i < S; ++i) place[i + 1] += place[i];
-  std::vector<CrossTriangle> cross(place[S]);
-  tbb::enumerable_thread_specific<RootCache> caches;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, S, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    RootCache& roots = caches.local();
-    for (std::size_t k = r.begin(); k != r.end(); ++k) {
-      const std::uint32_t i = by_vertex[k];
-      if (split_saddle_cross_triangles(splits_[i], cross.data() + place[i], roots) != int(place[i + 1] - place[i]))
-        throw InternalError("a split saddle's star has fewer cross triangles than upper-link components");
-    }
-  });
-  std::vector<std::uint32_t>().swap(by_vertex);
+  std::vector<std::uint32_t> place;
+  const std::vector<CrossTriangle> cross = records_in_grid_order<CrossTriangle>(
+      splits_,
+      [&](std::uint32_t s) {
+        std::uint16_t lower, outside;
+        masks(s, lower, outside);
+        return table_[std::uint16_t(~lower & 0x3FFF)].count - 1;
+      },
+      [&](std::uint32_t s, CrossTriangle* out, int count, RootCache& roots) {
+        if (split_saddle_cross_triangles(s, out, roots) != count)
+          throw InternalError("a split saddle's star has fewer cross triangles than upper-link components");
+      },
+      place);
   std::vector<std::uint32_t>().swap(place);
+  lap("dim 2: cross triangles (parallel)");
   std::vector<std::uint32_t> parent(maxima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const std::size_t first = out.pairs.size();
@@ -417,8 +434,7 @@ void Engine::dim2(PersistenceDiagram& out) {
     std::uint32_t g1 = find(parent, ct.rep1), g2 = find(parent, ct.rep2);
     Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
     if (g1 == g2) {
-      deaths1_.push_back({cx_.triangle_id(s, a, b),
-                        {std::int32_t(lobe_vertex(ct.s, ct.lobe1)), std::int32_t(lobe_vertex(ct.s, ct.lobe2))}});
+      deaths1_.push_back({ct.s, ct.a, ct.b, ct.lobe1, ct.lobe2});
       continue;
     }
     bool g1_younger = g2 == kOutside || (g1 != kOutside && less(maxima_list_[g1], maxima_list_[g2]));
@@ -435,10 +451,12 @@ void Engine::dim2(PersistenceDiagram& out) {
     p.birth_lobes = {lobe_vertex(ct.s, ct.lobe1), lobe_vertex(ct.s, ct.lobe2)};
     out.pairs.push_back(p);
   }
+  lap("dim 2: merges (sequential)");
   // each maximum's last tetrahedron sorts its star's 24 triangles: in parallel, after the merges
   tbb::parallel_for(first, out.pairs.size(), [&](std::size_t i) {
     out.pairs[i].death_simplex = last_tet(out.pairs[i].death_vertex);
   });
+  lap("dim 2: last tetrahedra (parallel)");
   std::reverse(deaths1_.begin(), deaths1_.end());  // ascending filtration order
   deaths1_.shrink_to_fit();  // kept through the parallel pass of dim 1
 }

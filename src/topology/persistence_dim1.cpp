@@ -40,10 +40,15 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
   auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
   for (int i = 1; i < n_lower; ++i) {
     const int a = order[i];
-    const unsigned adjacent = link_.adjacency[a];
-    for (int j = 0; j < i; ++j) {
-      const int b = order[j];
-      if (!(adjacent >> b & 1)) continue;
+    // the lower neighbours of a in the link that come before it, as a mask of their ranks: a link vertex has
+    // 4 to 6 neighbours, so this visits those instead of testing all i earlier ones
+    unsigned earlier = 0;
+    for (unsigned m = link_.adjacency[a] & info.lower; m; m &= m - 1) {
+      const int r = rank[__builtin_ctz(m)];
+      if (r < i) earlier |= 1u << r;
+    }
+    for (; earlier; earlier &= earlier - 1) {
+      const int b = order[__builtin_ctz(earlier)];
       int ra = lfind(a), rb = lfind(b);
       if (ra == rb) continue;
       bool a_younger = rank[ra] > rank[rb];
@@ -89,6 +94,21 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
   if (prev[target] == -2) throw InternalError("lower-link path not found in dim-1 reduction");
   push(make_edge(v, v + delta_[target]));
   for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
+}
+
+// Interleaves the bits of a vertex's coordinates (Z-order): vertices close in the grid get close keys at
+// every scale, so a run of keys stays in a compact brick whatever the grid's slice size.
+static std::uint64_t morton_key(std::array<int, 3> c) {
+  auto spread = [](std::uint64_t x) {
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFull;
+    x = (x | x << 16) & 0x1F0000FF0000FFull;
+    x = (x | x << 8) & 0x100F00F00F00F00Full;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  return spread(std::uint64_t(c[0])) | spread(std::uint64_t(c[1])) << 1 | spread(std::uint64_t(c[2])) << 2;
 }
 
 template <class Heap>
@@ -148,18 +168,22 @@ void Engine::dim1(PersistenceDiagram& out) {
     throw InternalError("dim-1 births and deaths do not balance (" + std::to_string(births1_) + " vs " +
                            std::to_string(deaths1_.size()) + ")");
   const std::size_t n = deaths1_.size();
+  auto lap = step_timer();
   // the death half of each pair now, in parallel; the sequential pass adds the birth
   const std::size_t base = out.pairs.size();
   out.pairs.resize(base + n);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     PersistencePair& pr = out.pairs[base + i];
     pr.dim = 1;
-    pr.death_simplex = deaths1_[i].triangle;
-    pr.death_vertex = sorted_descending(f_, cx_.triangle_vertices(pr.death_simplex))[0];
-    pr.death = f_[pr.death_vertex];
-    pr.death_lobes = {Id(deaths1_[i].lobes[0]), Id(deaths1_[i].lobes[1])};
+    const Death1& d = deaths1_[i];
+    const Id s = d.s;
+    pr.death_simplex = cx_.triangle_id(s, s + delta_[d.a], s + delta_[d.b]);
+    pr.death_vertex = s;  // a cross triangle lies in its saddle's lower star
+    pr.death = f_[s];
+    pr.death_lobes = {lobe_vertex(d.s, d.lobe1), lobe_vertex(d.s, d.lobe2)};
   });
   std::vector<Death1>().swap(deaths1_);
+  lap("dim 1: death halves (parallel)");
   struct EdgeLess {
     bool operator()(const EdgeKey& a, const EdgeKey& b) const { return edge_less(a, b); }
   };
@@ -173,11 +197,18 @@ void Engine::dim1(PersistenceDiagram& out) {
   // from its triangle, only as far as it must. This part is order-free, so it runs in grid order:
   // neighbouring triangles share lower links and field memory, which the filtration order scatters.
   std::vector<std::uint32_t> grid_order(n);
-  for (std::size_t i = 0; i < n; ++i) grid_order[i] = std::uint32_t(i);
-  tbb::parallel_sort(grid_order.begin(), grid_order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    const Id va = out.pairs[base + a].death_vertex, vb = out.pairs[base + b].death_vertex;
-    return va < vb || (va == vb && a < b);
-  });
+  {
+    struct Keyed { std::uint64_t key; std::uint32_t index; };
+    std::vector<Keyed> keyed(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+      keyed[i] = {morton_key(cx_.coords(out.pairs[base + i].death_vertex)), std::uint32_t(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) {
+      return a.key < b.key || (a.key == b.key && a.index < b.index);
+    });
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) { grid_order[k] = keyed[k].index; });
+  }
+  lap("dim 1: Z-order of the columns");
   // Where a column's ranks are: chunk `chunk`'s list, or the pool; kLazy marks a column known only as far
   // as its ranks go (its triangle gives the rest).
   constexpr std::uint32_t kPool = 0xFFFFFFFFu, kLazy = 0x80000000u;
@@ -230,6 +261,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     ++sampled;
   });
   const bool lazy_pass = long_ones * 100 > sampled;
+  lap("dim 1: sample of column lengths");
   const std::size_t budget = lazy_pass ? kColumnBudget : std::numeric_limits<std::size_t>::max();
   in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
     std::vector<std::uint32_t>& entries = first[c];
@@ -239,6 +271,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     where[i] = {std::uint32_t(c) | (full ? 0 : kLazy), std::uint32_t(begin), std::uint32_t(entries.size())};
     if (!full) ++lazy_columns;
   });
+  lap("dim 1: columns (parallel)");
   if (lazy_columns > 0) {
     std::vector<std::uint8_t> firsts(births1_, 0);  // how many columns start with each rank (0, 1, 2+)
     for (std::size_t i = 0; i < n; ++i)
@@ -259,6 +292,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     });
   }
   std::vector<std::uint32_t>().swap(grid_order);
+  lap("dim 1: lazy columns (parallel)");
   out.stats.dim1_lazy_columns = Id(lazy_columns.load());
   if (lazy_columns == 0) {  // every rank is known: no birth edge is looked up again
     std::vector<std::uint32_t>().swap(birth_table_);
@@ -349,17 +383,27 @@ void Engine::dim1(PersistenceDiagram& out) {
       }
     }
     owner[r] = i;
-    out.pairs[base + i].birth_simplex = Id(r);  // the rank, until the parallel pass below
   }
-  // the birth half of each pair from its rank: a search of the birth list and the saddle's lower link each
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-    PersistencePair& pr = out.pairs[base + i];
-    const EdgeKey p = birth_edge(std::uint32_t(pr.birth_simplex));
-    pr.birth = f_[p.hi];
-    pr.birth_simplex = cx_.edge_id(p.hi, p.lo);
-    pr.birth_vertex = p.hi;
-    pr.birth_lobes = {p.hi + delta_[lowest_slot(p.hi)], p.lo};
+  lap("dim 1: additions (sequential)");
+  // the birth half of each pair, a join saddle at a time: its birth edges are its lower slots in order
+  tbb::parallel_for(std::size_t(0), birth_list_.size(), [&](std::size_t q) {
+    const BirthSlots& b = birth_list_[q];
+    const Id s = b.saddle;
+    std::array<int, 14> order;
+    const int count = lower_slots_in_order(s, b.mask, order);
+    const Id lowest = s + delta_[lowest_slot(s)];
+    for (int k = 0; k < count; ++k) {
+      const std::uint32_t i = owner[b.base + std::uint32_t(k)];
+      if (i == kOutside) throw InternalError("a dim-1 birth edge left unpaired");
+      PersistencePair& pr = out.pairs[base + i];
+      const Id lo = s + delta_[order[k]];
+      pr.birth = f_[s];
+      pr.birth_simplex = cx_.edge_id(s, lo);
+      pr.birth_vertex = s;
+      pr.birth_lobes = {lowest, lo};
+    }
   });
+  lap("dim 1: birth halves (parallel)");
 }
 
 }  // namespace chokeloops::detail

@@ -4,8 +4,15 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/topology/persistence.h"
@@ -55,8 +62,10 @@ class Engine {
         table_(detail::link_component_table()), link_(freudenthal::vertex_link()) {
     for (int n = 0; n < 14; ++n) {
       delta_[n] = cx_.neighbor_delta(n);
-      auto o = freudenthal::neighbor_offset(n);
-      slot_of_offset_[(o[0] + 1) + 3 * (o[1] + 1) + 9 * (o[2] + 1)] = std::int8_t(n);
+      std::size_t h = delta_hash(delta_[n]);
+      while (slot_key_[h] != 0) h = (h + 1) & (kSlotTable - 1);
+      slot_key_[h] = delta_[n];
+      slot_of_key_[h] = std::int8_t(n);
     }
     for (int e = 0; e < 36; ++e) {
       link_edge_index_[link_.edges[e][0]][link_.edges[e][1]] = std::int8_t(e);
@@ -71,6 +80,16 @@ class Engine {
     if (progress_ && !progress_(stage, fraction)) throw Error("persistence interrupted");
   }
   bool less(Id a, Id b) const { return vertex_less(f_, a, b); }
+  // With CHOKELOOPS_DEBUG_PERSISTENCE set, lap("step") prints the seconds since the previous lap (or since the
+  // timer was made) to stderr: the split of each dimension's time that the README quotes.
+  static auto step_timer() {
+    static const bool on = std::getenv("CHOKELOOPS_DEBUG_PERSISTENCE") != nullptr;
+    return [t = Clock::now()](const char* step) mutable {
+      if (!on) return;
+      std::fprintf(stderr, "persistence step %-36s %.3f s\n", step, seconds_since(t));
+      t = Clock::now();
+    };
+  }
 
   // Lower mask and out-of-box mask of vertex v's 14 link slots.
   void masks(Id v, std::uint16_t& lower, std::uint16_t& outside) const {
@@ -78,23 +97,50 @@ class Engine {
     bool border = c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == grid_.dims[0] - 1 ||
                   c[1] == grid_.dims[1] - 1 || c[2] == grid_.dims[2] - 1;
     lower = outside = 0;
+    if (!border) {
+      // slots 0-6 have higher indices than v, 7-13 lower ones, which win ties: no branch on the field, whose
+      // comparisons on a rough field are coin flips
+      const float fv = f_[v];
+      unsigned bits = 0;
+      for (int n = 0; n < 7; ++n) bits |= unsigned(f_[v + delta_[n]] < fv) << n;
+      for (int n = 7; n < 14; ++n) bits |= unsigned(f_[v + delta_[n]] <= fv) << n;
+      lower = std::uint16_t(bits);
+      return;
+    }
     for (int n = 0; n < 14; ++n) {
-      if (border && !cx_.neighbor_inside(c, n)) { outside |= std::uint16_t(1u << n); continue; }
+      if (!cx_.neighbor_inside(c, n)) { outside |= std::uint16_t(1u << n); continue; }
       if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
     }
   }
   // The lower link slots of v from lowest to highest; returns how many.
+  // Each slot's place is the count of slots below it, all compared without a branch: on a rough field the
+  // comparisons are coin flips, and an insertion sort's mispredicted branches cost more than the ~n^2 tests.
   int lower_slots_in_order(Id v, std::uint16_t lower, std::array<int, 14>& order) const {
+    std::array<int, 14> slots;
+    std::array<float, 14> value;
     int n = 0;
-    for (unsigned m = lower; m; m &= m - 1) order[n++] = __builtin_ctz(m);
-    for (int i = 1; i < n; ++i)
-      for (int j = i; j > 0 && less(v + delta_[order[j]], v + delta_[order[j - 1]]); --j) std::swap(order[j], order[j - 1]);
+    for (unsigned m = lower; m; m &= m - 1) {
+      const int a = __builtin_ctz(m);
+      slots[n] = a;
+      value[n++] = f_[v + delta_[a]];
+    }
+    for (int i = 0; i < n; ++i) {
+      int place = 0;
+      for (int j = 0; j < n; ++j)
+        place += int(value[j] < value[i]) | (int(value[j] == value[i]) & int(delta_[slots[j]] < delta_[slots[i]]));
+      order[place] = slots[i];
+    }
     return n;
   }
+  // The link slot of neighbour x of v, from their index difference (distinct for the 14 slots: every axis
+  // has at least 2 vertices) through a small hash, where the coordinates cost six divisions.
   int slot(Id v, Id x) const {
-    auto a = cx_.coords(v), b = cx_.coords(x);
-    return slot_of_offset_[(b[0] - a[0] + 1) + 3 * (b[1] - a[1] + 1) + 9 * (b[2] - a[2] + 1)];
+    const Id d = x - v;
+    for (std::size_t h = delta_hash(d);; h = (h + 1) & (kSlotTable - 1))
+      if (slot_key_[h] == d) return slot_of_key_[h];
   }
+  static constexpr std::size_t kSlotTable = 32;
+  static std::size_t delta_hash(Id d) { return std::size_t(std::uint64_t(d) * 0x9E3779B97F4A7C15ull >> 59); }
 
   void classify();
   // The lower masks and steepest steps (slots, -1 for none) of `count` interior vertices of a row from `first`.
@@ -169,6 +215,44 @@ class Engine {
       x = parent[x];
     }
     return x;
+  }
+
+  // Each saddle's records (a few each: its lobes, its cross triangles), found in parallel and returned in the
+  // order of `saddles` (filtration order): saddle i's are [place[i], place[i+1]). count(s) says how many saddle
+  // s has; write(s, out, count, roots) writes them (roots: the thread's RootCache). Both run with the saddles
+  // in grid order, where neighbours share their stars' and walks' memory (filtration order scatters them over
+  // the grid); the records are then moved to their places in a pass of copies.
+  template <class Record, class Count, class Write>
+  static std::vector<Record> records_in_grid_order(const std::vector<std::uint32_t>& saddles, Count&& count,
+                                                   Write&& write, std::vector<std::uint32_t>& place) {
+    const std::size_t n = saddles.size();
+    struct Visit { std::uint32_t vertex, index; };
+    std::vector<Visit> visits(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { visits[i] = {saddles[i], std::uint32_t(i)}; });
+    tbb::parallel_sort(visits.begin(), visits.end(), [](const Visit& a, const Visit& b) { return a.vertex < b.vertex; });
+    auto in_parallel = [&](auto&& body) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t k = r.begin(); k != r.end(); ++k) body(k);
+      });
+    };
+    std::vector<std::uint32_t> at(n + 1, 0);  // where visit k's records are in grid order
+    in_parallel([&](std::size_t k) { at[k + 1] = std::uint32_t(count(visits[k].vertex)); });
+    for (std::size_t k = 0; k < n; ++k) at[k + 1] += at[k];
+    std::vector<Record> in_grid(at[n]);
+    tbb::enumerable_thread_specific<RootCache> caches;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      RootCache& roots = caches.local();
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        write(visits[k].vertex, in_grid.data() + at[k], int(at[k + 1] - at[k]), roots);
+    });
+    place.assign(n + 1, 0);
+    in_parallel([&](std::size_t k) { place[visits[k].index + 1] = at[k + 1] - at[k]; });
+    for (std::size_t i = 0; i < n; ++i) place[i + 1] += place[i];
+    std::vector<Record> records(place[n]);
+    in_parallel([&](std::size_t k) {
+      std::copy(in_grid.begin() + at[k], in_grid.begin() + at[k + 1], records.begin() + place[visits[k].index]);
+    });
+    return records;
   }
 
   void dim0(PersistenceDiagram& out);
@@ -269,7 +353,8 @@ class Engine {
   const std::vector<detail::LinkComponents>& table_;
   const freudenthal::Link& link_;
   std::array<Id, 14> delta_{};
-  std::array<std::int8_t, 27> slot_of_offset_{};
+  std::array<Id, kSlotTable> slot_key_{};  // 0: empty (no slot's delta is 0)
+  std::array<std::int8_t, kSlotTable> slot_of_key_{};
   std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
   std::vector<std::uint8_t> codes_;  // steps down and up, freed after dim 2
   std::vector<std::uint32_t> joins_, splits_;
@@ -282,9 +367,9 @@ class Engine {
   std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
   std::vector<std::uint64_t> has_births_;    // a bit per vertex: in birth_list_ (most lookups are misses)
   std::size_t births1_ = 0;
-  // A dim-1 death triangle and the two sides its split saddle joins (32-bit: validate_grid keeps vertex ids
-  // below 2^31; -2 is the outside).
-  struct Death1 { Id triangle; std::array<std::int32_t, 2> lobes; };
+  // A dim-1 death triangle (s, s + delta_[a], s + delta_[b]) of split saddle s, its highest vertex, and the
+  // link slots of the two sides it joins (-1: outside the box). 8 bytes: one per dim-1 pair.
+  struct Death1 { std::uint32_t s; std::uint8_t a, b; std::int8_t lobe1, lobe2; };
   std::vector<Death1> deaths1_;
 };
 
