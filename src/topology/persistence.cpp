@@ -318,16 +318,20 @@ void Engine::dim0(PersistenceDiagram& out) {
 }
 
 void Engine::index_birth_list() {
-  std::size_t cap = 16;
-  while (2 * cap < 3 * birth_list_.size()) cap *= 2;  // load <= 2/3: has_births_ answers the misses
-  birth_table_.assign(cap, kOutside);
-  has_births_.assign((std::size_t(V_) + 63) / 64, 0);
-  for (std::uint32_t i = 0; i < birth_list_.size(); ++i) {
-    has_births_[birth_list_[i].saddle >> 6] |= std::uint64_t(1) << (birth_list_[i].saddle & 63);
-    std::size_t h = hash_vertex(birth_list_[i].saddle);
-    while (birth_table_[h] != kOutside) h = (h + 1) & (cap - 1);
-    birth_table_[h] = i;
+  birth_blocks_.assign((std::size_t(V_) + 63) / 64, BirthBlock{0, 0});
+  for (const BirthSlots& b : birth_list_) birth_blocks_[b.saddle >> 6].bits |= std::uint64_t(1) << (b.saddle & 63);
+  std::uint32_t before = 0;
+  for (BirthBlock& block : birth_blocks_) {
+    block.before = before;
+    before += std::uint32_t(__builtin_popcountll(block.bits));
   }
+  birth_by_vertex_.resize(birth_list_.size());
+  tbb::parallel_for(std::size_t(0), birth_list_.size(), [&](std::size_t i) {
+    const BirthSlots& b = birth_list_[i];
+    const BirthBlock& block = birth_blocks_[b.saddle >> 6];
+    const std::uint64_t bit = std::uint64_t(1) << (b.saddle & 63);
+    birth_by_vertex_[block.before + std::uint32_t(__builtin_popcountll(block.bits & (bit - 1)))] = {b.mask, b.base};
+  });
 }
 
 Id Engine::last_tet(Id m) const {
@@ -397,9 +401,11 @@ int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, Ro
       const auto& et = link_.edge_triangles[e];
       int r1 = lfind(node_of(et[0])), r2 = lfind(node_of(et[1]));
       if (r1 == r2) continue;
-      if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0)
+      if (comp_rep[r1] >= 0 && comp_rep[r2] >= 0) {
         out[written++] = {s, std::uint8_t(link_.edges[e][0]), std::uint8_t(link_.edges[e][1]), lobe[comp_rep[r1]],
                           lobe[comp_rep[r2]], rep[comp_rep[r1]], rep[comp_rep[r2]]};
+        if (written == ucomps.count - 1) return written;  // the rest of the star joins nothing more
+      }
       parent[r2] = r1;
       if (comp_rep[r1] < 0) comp_rep[r1] = comp_rep[r2];
     }

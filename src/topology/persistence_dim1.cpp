@@ -38,7 +38,9 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
   std::array<int, 14> parent;
   for (int n = 0; n < 14; ++n) parent[n] = n;
   auto lfind = [&](int x) { while (parent[x] != x) x = parent[x] = parent[parent[x]]; return x; };
-  for (int i = 1; i < n_lower; ++i) {
+  // the link's components end as the table says: once that many are left, no later edge kills a slot
+  int merges_left = n_lower - table_[info.lower].count;
+  for (int i = 1; i < n_lower && merges_left > 0; ++i) {
     const int a = order[i];
     // the lower neighbours of a in the link that come before it, as a mask of their ranks: a link vertex has
     // 4 to 6 neighbours, so this visits those instead of testing all i earlier ones
@@ -56,6 +58,7 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
       parent[young] = old;
       info.killer[young] = link_edge_index_[a][b];
       info.older[young] = std::int8_t(old);
+      --merges_left;
     }
   }
   if (n_lower) info.lowest = std::int8_t(order[0]);
@@ -130,9 +133,9 @@ bool Engine::pop_to_birth_pivot(Heap& heap, LinkCache& links, EdgeKey& p, std::u
     // A root's edge is negative (it attaches p.hi, or merges two components) unless dim 0 left it as a
     // birth; the lowest root's edge always attaches. Negative edges are compressed away.
     if (x == info.lowest) continue;
-    const BirthSlots* b = birth_slots(p.hi);
+    const BirthEntry* b = birth_slots(p.hi);
     if (b && (b->mask >> x & 1)) {
-      rank = birth_rank_in(*b, p.lo);
+      rank = birth_rank_in(p.hi, *b, p.lo);
       return true;
     }
   }
@@ -295,8 +298,8 @@ void Engine::dim1(PersistenceDiagram& out) {
   lap("dim 1: lazy columns (parallel)");
   out.stats.dim1_lazy_columns = Id(lazy_columns.load());
   if (lazy_columns == 0) {  // every rank is known: no birth edge is looked up again
-    std::vector<std::uint32_t>().swap(birth_table_);
-    std::vector<std::uint64_t>().swap(has_births_);
+    std::vector<BirthBlock>().swap(birth_blocks_);
+    std::vector<BirthEntry>().swap(birth_by_vertex_);
   }
   report("dim 1", 0.8);
   // In filtration order: a column whose pivot is owned adds the owner's column until its pivot is free.

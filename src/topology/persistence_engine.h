@@ -257,18 +257,16 @@ class Engine {
 
   void dim0(PersistenceDiagram& out);
 
-  // An open-addressing table from join saddle to its entry in birth_list_: one cache miss per lookup.
+  // The join saddles with births by vertex, found with one cache miss past the saddle's bit: a bit per vertex
+  // with, per 64 vertices, how many saddles come before (rank), and then the saddle's entry in vertex order.
   void index_birth_list();
-  std::size_t hash_vertex(std::uint32_t v) const {
-    return (std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> 32) & (birth_table_.size() - 1);
-  }
-  const BirthSlots* birth_slots(Id s) const {
-    if (!(has_births_[std::size_t(s) >> 6] >> (s & 63) & 1)) return nullptr;
-    for (std::size_t h = hash_vertex(std::uint32_t(s));; h = (h + 1) & (birth_table_.size() - 1)) {
-      std::uint32_t i = birth_table_[h];
-      if (i == kOutside) return nullptr;
-      if (birth_list_[i].saddle == std::uint32_t(s)) return &birth_list_[i];
-    }
+  struct BirthBlock { std::uint64_t bits; std::uint32_t before; };
+  struct BirthEntry { std::uint16_t mask; std::uint32_t base; };
+  const BirthEntry* birth_slots(Id s) const {
+    const BirthBlock& block = birth_blocks_[std::size_t(s) >> 6];
+    const std::uint64_t bit = std::uint64_t(1) << (s & 63);
+    if (!(block.bits & bit)) return nullptr;
+    return &birth_by_vertex_[block.before + std::uint32_t(__builtin_popcountll(block.bits & (bit - 1)))];
   }
 
   // The last tetrahedron (in filtration order) of the star of a maximum m.
@@ -293,7 +291,7 @@ class Engine {
   // A thread's cache of lower links, direct-mapped by a hash of the vertex: the columns are reduced in grid
   // order, so the links they need are mostly recent ones, and a miss only recomputes.
   struct LinkCache {
-    static constexpr int kBits = 16;
+    static constexpr int kBits = 14;
     std::vector<Id> key = std::vector<Id>(std::size_t(1) << kBits, Id(-1));
     std::vector<LowerLinkInfo> info = std::vector<LowerLinkInfo>(std::size_t(1) << kBits);
     const LowerLinkInfo& get(const Engine& engine, Id v);
@@ -311,10 +309,10 @@ class Engine {
 
   // Rank of birth edge (b.saddle, x) among all dim-1 birth edges in filtration order: the saddles' order,
   // then each saddle's lower ends in order.
-  std::uint32_t birth_rank_in(const BirthSlots& b, Id x) const {
+  std::uint32_t birth_rank_in(Id saddle, const BirthEntry& b, Id x) const {
     std::uint32_t r = b.base;
     for (unsigned m = b.mask; m; m &= m - 1)
-      if (less(Id(b.saddle) + delta_[__builtin_ctz(m)], x)) ++r;
+      if (less(saddle + delta_[__builtin_ctz(m)], x)) ++r;
     return r;
   }
 
@@ -364,8 +362,8 @@ class Engine {
   Id global_min_ = 0;
   std::size_t extra_lower_ = 0, extra_upper_ = 0;  // extra link components of join and split saddles
   std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
-  std::vector<std::uint32_t> birth_table_;  // hash of birth_list_ by saddle
-  std::vector<std::uint64_t> has_births_;    // a bit per vertex: in birth_list_ (most lookups are misses)
+  std::vector<BirthBlock> birth_blocks_;    // a bit per vertex: in birth_list_ (most lookups are misses)
+  std::vector<BirthEntry> birth_by_vertex_;  // birth_list_'s entries in vertex order
   std::size_t births1_ = 0;
   // A dim-1 death triangle (s, s + delta_[a], s + delta_[b]) of split saddle s, its highest vertex, and the
   // link slots of the two sides it joins (-1: outside the box). 8 bytes: one per dim-1 pair.
