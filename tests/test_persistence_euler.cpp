@@ -197,3 +197,25 @@ TEST(PersistenceEuler, PairsAreConsistentWithTheirSimplices) {
 }
 
 }  // namespace
+
+// The coordinates of a vertex come from multiply-and-shift divisions: exact for every index below 2^31.
+TEST(PersistenceEuler, DivisionByMultiplyAndShiftIsExact) {
+  std::mt19937_64 rng(7);
+  const std::uint64_t top = (std::uint64_t(1) << 31) - 1;
+  for (std::uint64_t d : {std::uint64_t(1), std::uint64_t(2), std::uint64_t(3), std::uint64_t(7), std::uint64_t(255),
+                          std::uint64_t(256), std::uint64_t(309), std::uint64_t(309 * 277), std::uint64_t(65537),
+                          std::uint64_t(1) << 30, top}) {
+    const DivideBy31 div(d);
+    std::vector<std::uint64_t> ns = {0, 1, d - 1, d, d + 1, top, top - 1, top - d};
+    for (std::uint64_t k = 1; k * d <= top && k < 1000; ++k) ns.insert(ns.end(), {k * d - 1, k * d});
+    for (int i = 0; i < 20000; ++i) ns.push_back(rng() & top);
+    for (std::uint64_t n : ns)
+      if (n <= top) ASSERT_EQ(div(n), n / d) << n << " / " << d;
+  }
+  const FreudenthalComplex cx({309, 277, 245});
+  for (Id v : {Id(0), Id(308), Id(309), Id(309 * 277 - 1), Id(309 * 277), cx.vertex_count() - 1}) {
+    auto c = cx.coords(v);
+    EXPECT_EQ(cx.vertex(c[0], c[1], c[2]), v);
+    EXPECT_TRUE(cx.inside(c[0], c[1], c[2]));
+  }
+}

@@ -28,6 +28,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <cstdio>
 #include <cstring>
@@ -209,9 +210,27 @@ void Engine::classify() {
   tbb::parallel_sort(maxima_list_.begin(), maxima_list_.end());
   minimum_index_.build(minima_list_, V_);
   maximum_index_.build(maxima_list_, V_);
-  auto by_order = [this](std::uint32_t a, std::uint32_t b) { return less(a, b); };
-  tbb::parallel_sort(joins_.begin(), joins_.end(), by_order);
-  tbb::parallel_sort(splits_.begin(), splits_.end(), [&](std::uint32_t a, std::uint32_t b) { return less(b, a); });
+  sort_in_filtration_order(joins_, false);
+  sort_in_filtration_order(splits_, true);
+}
+
+// Sorted as 64-bit keys (the value's bits made to order as the value, then the index: the filtration order
+// of vertex_less), where a comparison of two vertices reads the field at two scattered places.
+void Engine::sort_in_filtration_order(std::vector<std::uint32_t>& vertices, bool descending) const {
+  std::vector<std::uint64_t> keys(vertices.size());
+  tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t i) {
+    float value = f_[vertices[i]];
+    if (value == 0.0f) value = 0.0f;  // -0 ties +0 in the field's order
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, 4);
+    bits = (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
+    keys[i] = std::uint64_t(bits) << 32 | vertices[i];
+  });
+  if (descending)
+    tbb::parallel_sort(keys.begin(), keys.end(), std::greater<std::uint64_t>());
+  else
+    tbb::parallel_sort(keys.begin(), keys.end());
+  tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t i) { vertices[i] = std::uint32_t(keys[i]); });
 }
 
 void Engine::guard_memory(PersistenceDiagram& out) {
@@ -221,13 +240,14 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   const std::size_t births1 = extra_lower_ > minima - 1 ? extra_lower_ - (minima - 1) : 0;
   const std::size_t pairs = minima - 1 + extra_upper_;
   // The peak is that of dim 0, dim 2 or dim 1, from the arrays each holds (bytes per item): the field and the
-  // steps (4 + 1 a vertex), a bit a vertex for the saddles with births, the extrema's lists and their bucket
-  // indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so far, the birth slots of the join saddles
-  // (~18 with their hash entry); while a dimension's saddles are visited in grid order, their visit order and
-  // two places (16) and each record twice (dim 0: a lobe and its minimum, 8; dim 2: a cross triangle, 16); at
-  // the end of dim 2 the cross triangles and the dim-1 deaths (8); then the field, the whole diagram and per
-  // dim-1 death its Z-order key, column place, ~3 ranks, owner and pool share (36).
-  const std::size_t V = std::size_t(V_), bits = V / 8, birth_slots = joins_.size() * 18;
+  // steps (4 + 1 a vertex), the index of the saddles with births (a bit and a rank share: 2 bits a vertex),
+  // the extrema's lists and their bucket indexes (4 + ~8), a union-find (4), the saddle lists, the pairs so
+  // far, the birth slots of the join saddles (20 with their entry in vertex order); while a dimension's
+  // saddles are visited in grid order, their visit order and two places (16) and each record twice (dim 0: a
+  // lobe and its minimum, 8; dim 2: a cross triangle, 16); at the end of dim 2 the cross triangles and the
+  // dim-1 deaths (8); then the field, the whole diagram and per dim-1 death its Z-order key, column place,
+  // ~3 ranks, owner and pool share (36).
+  const std::size_t V = std::size_t(V_), bits = V / 4, birth_slots = joins_.size() * 20;
   const std::size_t pair = sizeof(PersistencePair), extrema = std::size_t(minima_ + maxima_) * 12;
   const std::size_t classify = V * 5 + extrema + (joins_.size() + splits_.size()) * 4;
   const std::size_t lobes = (joins_.size() + extra_lower_) * 8 * 2 + joins_.size() * 16;
@@ -285,7 +305,10 @@ void Engine::dim0(PersistenceDiagram& out) {
       },
       place);
   lap("dim 0: lobes and minima (parallel)");
+  // the union-find reads scattered minima: their entries are asked for a few saddles ahead
+  constexpr std::size_t kAhead = 32;
   for (std::size_t i = 0; i < J; ++i) {
+    if (place[i] + kAhead < lobes.size()) __builtin_prefetch(&parent[lobes[place[i] + kAhead].root]);
     const std::uint32_t s = joins_[i];
     const Lobe* L = lobes.data() + place[i];
     const int count = int(place[i + 1] - place[i]);
@@ -436,7 +459,14 @@ void Engine::dim2(PersistenceDiagram& out) {
   std::vector<std::uint32_t> parent(maxima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const std::size_t first = out.pairs.size();
-  for (const CrossTriangle& ct : cross) {
+  constexpr std::size_t kAhead = 32;  // as in dim 0
+  for (std::size_t k = 0; k < cross.size(); ++k) {
+    const CrossTriangle& ct = cross[k];
+    if (k + kAhead < cross.size()) {
+      const CrossTriangle& next = cross[k + kAhead];
+      if (next.rep1 != kOutside) __builtin_prefetch(&parent[next.rep1]);
+      if (next.rep2 != kOutside) __builtin_prefetch(&parent[next.rep2]);
+    }
     std::uint32_t g1 = find(parent, ct.rep1), g2 = find(parent, ct.rep2);
     Id s = ct.s, a = s + delta_[ct.a], b = s + delta_[ct.b];
     if (g1 == g2) {

@@ -66,7 +66,7 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
 }
 
 const LowerLinkInfo& Engine::LinkCache::get(const Engine& engine, Id v) {
-  const std::size_t h = std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits));
+  const std::size_t h = slot(v);
   if (key[h] != v) {
     key[h] = v;
     info[h] = engine.compute_lower_link(v);

@@ -151,6 +151,7 @@ class Engine {
     void resize(std::size_t n) { lower.resize(n), lo.resize(n), hi.resize(n), lowest.resize(n), highest.resize(n); }
   };
   void classify_interior_row(Id first, int count, RowScratch& out) const;
+  void sort_in_filtration_order(std::vector<std::uint32_t>& vertices, bool descending) const;
   // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
   void guard_memory(PersistenceDiagram& out);
 
@@ -295,6 +296,7 @@ class Engine {
     std::vector<Id> key = std::vector<Id>(std::size_t(1) << kBits, Id(-1));
     std::vector<LowerLinkInfo> info = std::vector<LowerLinkInfo>(std::size_t(1) << kBits);
     const LowerLinkInfo& get(const Engine& engine, Id v);
+    static std::size_t slot(Id v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
   };
   EdgeKey make_edge(Id a, Id b) const {
     float fa = f_[a], fb = f_[b];

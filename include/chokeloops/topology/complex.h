@@ -62,12 +62,29 @@ const Link& vertex_link();
 
 }  // namespace freudenthal
 
+// Division of a 31-bit index by a fixed divisor as a multiply and a shift (round-up reciprocal): exact for every
+// n < 2^31 and d < 2^31, and ~10x cheaper than the division it replaces in the coordinates of a vertex.
+struct DivideBy31 {
+  std::uint64_t magic = 0;
+  int shift = 0;
+  DivideBy31() = default;
+  explicit DivideBy31(std::uint64_t d) {
+    int l = 0;
+    while ((std::uint64_t(1) << l) < d) ++l;
+    shift = 32 + l;
+    magic = std::uint64_t(((unsigned __int128)1 << shift) / d + (((unsigned __int128)1 << shift) % d != 0));
+  }
+  std::uint64_t operator()(std::uint64_t n) const { return (n * magic) >> shift; }
+};
+
 class FreudenthalComplex {
  public:
   explicit FreudenthalComplex(std::array<int, 3> dims) : dims_(dims) {
     sx_ = 1;
     sy_ = dims[0];
     sz_ = Id(dims[0]) * dims[1];
+    fast_ = dims[0] > 0 && sz_ > 0 && sz_ < (Id(1) << 31);
+    if (fast_) by_x_ = DivideBy31(std::uint64_t(dims[0])), by_slice_ = DivideBy31(std::uint64_t(sz_));
   }
   const std::array<int, 3>& dims() const { return dims_; }
   Id vertex_count() const { return sz_ * dims_[2]; }
@@ -76,6 +93,11 @@ class FreudenthalComplex {
   Id tet_id_bound() const { return 6 * vertex_count(); }
 
   std::array<int, 3> coords(Id v) const {
+    if (fast_ && std::uint64_t(v) < (std::uint64_t(1) << 31)) {
+      const std::uint64_t z = by_slice_(std::uint64_t(v)), r = std::uint64_t(v) - z * std::uint64_t(sz_);
+      const std::uint64_t y = by_x_(r);
+      return {int(r - y * std::uint64_t(dims_[0])), int(y), int(z)};
+    }
     return {int(v % dims_[0]), int((v / dims_[0]) % dims_[1]), int(v / sz_)};
   }
   Id vertex(int i, int j, int k) const { return i + sy_ * j + sz_ * k; }
@@ -137,6 +159,8 @@ class FreudenthalComplex {
  private:
   std::array<int, 3> dims_;
   Id sx_, sy_, sz_;
+  bool fast_ = false;  // coordinates by DivideBy31 (the slice size and every index below 2^31)
+  DivideBy31 by_x_, by_slice_;
 };
 
 // The total order on vertices: by value, then by linear index (the symbolic perturbation).
