@@ -21,8 +21,8 @@ namespace chokeloops::detail {
 constexpr std::size_t kColumnBudget = 16;
 constexpr std::size_t kSharedBudget = 256;
 // A column popping more than kLongColumn edges is long; a field with over 1% long columns among a sample of
-// every kSampleStride-th is reduced lazily.
-constexpr std::size_t kLongColumn = 128, kSampleStride = 64;
+// every kSampleStride-th (or of about kSamples, where there are more) is reduced lazily.
+constexpr std::size_t kLongColumn = 128, kSampleStride = 64, kSamples = 8192;
 
 LowerLinkInfo Engine::compute_lower_link(Id v) const {
   LowerLinkInfo info;
@@ -255,12 +255,13 @@ void Engine::dim1(PersistenceDiagram& out) {
   // short; on smooth fields with sparse noise most columns are long (the boundary runs far down) and few are
   // ever added to: there only the ranks the sequential pass asks for are found. A sample decides which.
   std::atomic<std::size_t> sampled{0}, long_ones{0};
-  tbb::parallel_for(std::size_t(0), (n + kSampleStride - 1) / kSampleStride, [&](std::size_t k) {
+  const std::size_t stride = std::max(kSampleStride, n / kSamples);
+  tbb::parallel_for(std::size_t(0), (n + stride - 1) / stride, [&](std::size_t k) {
     std::unique_ptr<LinkCache>& links = caches.local();
     if (!links) links = std::make_unique<LinkCache>();
     Heap heap;
     std::vector<std::uint32_t> ranks;
-    if (!reduce_column(heap, *links, grid_order[k * kSampleStride], kLongColumn, ranks)) ++long_ones;
+    if (!reduce_column(heap, *links, grid_order[k * stride], kLongColumn, ranks)) ++long_ones;
     ++sampled;
   });
   const bool lazy_pass = long_ones * 100 > sampled;
