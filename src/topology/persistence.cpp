@@ -283,11 +283,7 @@ void Engine::dim0(PersistenceDiagram& out) {
   std::vector<std::uint32_t> place;
   const std::vector<Lobe> lobes = records_in_grid_order<Lobe>(
       joins_,
-      [&](std::uint32_t s) {
-        std::uint16_t lower, outside;
-        masks(s, lower, outside);
-        return table_[lower].count;
-      },
+      [&](std::uint32_t s) { return table_[lower_mask(s)].count; },
       [&](std::uint32_t s, Lobe* L, int count, RootCache& roots) {
         std::uint16_t lower, outside;
         masks(s, lower, outside);
@@ -444,11 +440,7 @@ void Engine::dim2(PersistenceDiagram& out) {
   std::vector<std::uint32_t> place;
   const std::vector<CrossTriangle> cross = records_in_grid_order<CrossTriangle>(
       splits_,
-      [&](std::uint32_t s) {
-        std::uint16_t lower, outside;
-        masks(s, lower, outside);
-        return table_[std::uint16_t(~lower & 0x3FFF)].count - 1;
-      },
+      [&](std::uint32_t s) { return table_[std::uint16_t(~lower_mask(s) & 0x3FFF)].count - 1; },
       [&](std::uint32_t s, CrossTriangle* out, int count, RootCache& roots) {
         if (split_saddle_cross_triangles(s, out, roots) != count)
           throw InternalError("a split saddle's star has fewer cross triangles than upper-link components");

@@ -112,6 +112,11 @@ class Engine {
       if (less(v + delta_[n], v)) lower |= std::uint16_t(1u << n);
     }
   }
+  std::uint16_t lower_mask(Id v) const {
+    std::uint16_t lower, outside;
+    masks(v, lower, outside);
+    return lower;
+  }
   // The lower link slots of v from lowest to highest; returns how many.
   // Each slot's place is the count of slots below it, all compared without a branch: on a rough field the
   // comparisons are coin flips, and an insertion sort's mispredicted branches cost more than the ~n^2 tests.
