@@ -141,8 +141,10 @@ class Engine {
   // has at least 2 vertices) through a small hash, where the coordinates cost six divisions.
   int slot(Id v, Id x) const {
     const Id d = x - v;
-    for (std::size_t h = delta_hash(d);; h = (h + 1) & (kSlotTable - 1))
+    for (std::size_t h = delta_hash(d);; h = (h + 1) & (kSlotTable - 1)) {
       if (slot_key_[h] == d) return slot_of_key_[h];
+      if (slot_key_[h] == 0) throw InternalError("persistence asked the link slot of a vertex that is not a neighbour");
+    }
   }
   static constexpr std::size_t kSlotTable = 32;
   static std::size_t delta_hash(Id d) { return std::size_t(std::uint64_t(d) * 0x9E3779B97F4A7C15ull >> 59); }
