@@ -13,6 +13,9 @@
 #include <string>
 #include <unordered_map>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include "persistence_engine.h"
 
 namespace chokeloops::detail {
@@ -99,6 +102,20 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
   for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
 }
 
+// Asks the kernel for the pages of [begin, begin + bytes) in parallel, 64 MB a task (whole pages only). Where
+// madvise cannot (a kernel before 5.14), the first touch faults them in as before.
+static void populate_in_parallel(void* begin, std::size_t bytes) {
+  const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
+  const std::uintptr_t from = (std::uintptr_t(begin) + page - 1) & ~(page - 1);
+  const std::uintptr_t to = (std::uintptr_t(begin) + bytes) & ~(page - 1);
+  if (to <= from) return;
+  const std::uintptr_t chunk = std::uintptr_t(64) << 20;
+  tbb::parallel_for(std::uintptr_t(0), (to - from + chunk - 1) / chunk, [&](std::uintptr_t k) {
+    const std::uintptr_t a = from + k * chunk, b = std::min(to, a + chunk);
+    madvise(reinterpret_cast<void*>(a), b - a, MADV_POPULATE_WRITE);
+  });
+}
+
 // Interleaves the bits of a vertex's coordinates (Z-order): vertices close in the grid get close keys at
 // every scale, so a run of keys stays in a compact brick whatever the grid's slice size.
 static std::uint64_t morton_key(std::array<int, 3> c) {
@@ -174,6 +191,9 @@ void Engine::dim1(PersistenceDiagram& out) {
   auto lap = step_timer();
   // the death half of each pair now, in parallel; the sequential pass adds the birth
   const std::size_t base = out.pairs.size();
+  // The pairs' storage was reserved for the whole diagram but never touched: fault it in from every thread
+  // first, where the resize would take each fresh page's fault and clearing in one.
+  populate_in_parallel(out.pairs.data() + base, (out.pairs.capacity() - base) * sizeof(PersistencePair));
   out.pairs.resize(base + n);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
     PersistencePair& pr = out.pairs[base + i];
