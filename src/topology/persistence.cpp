@@ -285,9 +285,7 @@ void Engine::dim0(PersistenceDiagram& out) {
       joins_,
       [&](std::uint32_t s) { return table_[lower_mask(s)].count; },
       [&](std::uint32_t s, Lobe* L, int count, RootCache& roots) {
-        std::uint16_t lower, outside;
-        masks(s, lower, outside);
-        const auto& comps = table_[lower];
+        const auto& comps = table_[lower_mask(s)];
         for (int c = 0; c < count; ++c) {
           Id best = -1;
           for (unsigned m = comps.masks[c]; m; m &= m - 1) {
@@ -408,13 +406,9 @@ int Engine::split_saddle_cross_triangles(std::uint32_t s, CrossTriangle* out, Ro
   std::array<std::int8_t, 14> rank;
   for (int i = 0; i < n_lower; ++i) rank[order[i]] = std::int8_t(i);
   for (int i = n_lower - 1; i > 0; --i) {
-    // as in compute_lower_link: the earlier lower neighbours of order[i] as a mask of ranks, latest first
-    unsigned earlier = 0;
-    for (unsigned m = link_.adjacency[order[i]] & lower; m; m &= m - 1) {
-      const int r = rank[__builtin_ctz(m)];
-      if (r < i) earlier |= 1u << r;
-    }
-    for (; earlier; earlier &= ~(1u << (31 - __builtin_clz(earlier)))) {
+    // latest first: reverse filtration order
+    for (unsigned earlier = earlier_link_neighbours(order[i], i, lower, rank); earlier;
+         earlier &= ~(1u << (31 - __builtin_clz(earlier)))) {
       const int j = 31 - __builtin_clz(earlier);
       const int e = link_edge_index_[order[i]][order[j]];
       const auto& et = link_.edge_triangles[e];
@@ -480,7 +474,7 @@ void Engine::dim2(PersistenceDiagram& out) {
     out.pairs.push_back(p);
   }
   lap("dim 2: merges (sequential)");
-  // each maximum's last tetrahedron sorts its star's 24 triangles: in parallel, after the merges
+  // each maximum's last tetrahedron ranks its 14 neighbours: in parallel, after the merges
   tbb::parallel_for(first, out.pairs.size(), [&](std::size_t i) {
     out.pairs[i].death_simplex = last_tet(out.pairs[i].death_vertex);
   });

@@ -45,14 +45,7 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
   int merges_left = n_lower - table_[info.lower].count;
   for (int i = 1; i < n_lower && merges_left > 0; ++i) {
     const int a = order[i];
-    // the lower neighbours of a in the link that come before it, as a mask of their ranks: a link vertex has
-    // 4 to 6 neighbours, so this visits those instead of testing all i earlier ones
-    unsigned earlier = 0;
-    for (unsigned m = link_.adjacency[a] & info.lower; m; m &= m - 1) {
-      const int r = rank[__builtin_ctz(m)];
-      if (r < i) earlier |= 1u << r;
-    }
-    for (; earlier; earlier &= earlier - 1) {
+    for (unsigned earlier = earlier_link_neighbours(a, i, info.lower, rank); earlier; earlier &= earlier - 1) {
       const int b = order[__builtin_ctz(earlier)];
       int ra = lfind(a), rb = lfind(b);
       if (ra == rb) continue;

@@ -137,6 +137,17 @@ class Engine {
     }
     return n;
   }
+  // The lower-link neighbours of slot a that come before it in the order (rank below i), as a mask of their
+  // ranks: a link vertex has 4 to 6 neighbours, so a replay of the lower link's edges in filtration order
+  // visits those instead of testing all i earlier slots.
+  unsigned earlier_link_neighbours(int a, int i, std::uint16_t lower, const std::array<std::int8_t, 14>& rank) const {
+    unsigned earlier = 0;
+    for (unsigned m = link_.adjacency[a] & lower; m; m &= m - 1) {
+      const int r = rank[__builtin_ctz(m)];
+      if (r < i) earlier |= 1u << r;
+    }
+    return earlier;
+  }
   // The link slot of neighbour x of v, from their index difference (distinct for the 14 slots: every axis
   // has at least 2 vertices) through a small hash, where the coordinates cost six divisions.
   int slot(Id v, Id x) const {
