@@ -91,7 +91,9 @@ void Engine::expand_local_pair(Id v, const LowerLinkInfo& info, int x, Push&& pu
     }
   }
   if (prev[target] == -2) throw InternalError("lower-link path not found in dim-1 reduction");
-  push(make_edge(v, v + delta_[target]));
+  // (v, lowest) attaches v: a negative edge, which the reduction drops wherever it pops, so it is not pushed
+  // (on rough fields most expansions end at the lowest root)
+  if (target != info.lowest) push(make_edge(v, v + delta_[target]));
   for (int b = target; prev[b] >= 0; b = prev[b]) push(make_edge(v + delta_[b], v + delta_[prev[b]]));
 }
 
