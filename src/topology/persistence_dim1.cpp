@@ -62,12 +62,12 @@ LowerLinkInfo Engine::compute_lower_link(Id v) const {
 }
 
 const LowerLinkInfo& Engine::LinkCache::get(const Engine& engine, Id v) {
-  const std::size_t h = slot(v);
-  if (key[h] != v) {
-    key[h] = v;
-    info[h] = engine.compute_lower_link(v);
+  Entry& e = entries[slot(v)];
+  if (e.key != std::uint32_t(v)) {
+    e.key = std::uint32_t(v);
+    e.info = engine.compute_lower_link(v);
   }
-  return info[h];
+  return e.info;
 }
 
 template <class Push>

@@ -311,8 +311,9 @@ class Engine {
   // order, so the links they need are mostly recent ones, and a miss only recomputes.
   struct LinkCache {
     static constexpr int kBits = 14;
-    std::vector<Id> key = std::vector<Id>(std::size_t(1) << kBits, Id(-1));
-    std::vector<LowerLinkInfo> info = std::vector<LowerLinkInfo>(std::size_t(1) << kBits);
+    // the key beside its link: one cache line read where two arrays cost two misses
+    struct Entry { std::uint32_t key = kOutside; LowerLinkInfo info; };
+    std::vector<Entry> entries = std::vector<Entry>(std::size_t(1) << kBits);
     const LowerLinkInfo& get(const Engine& engine, Id v);
     static std::size_t slot(Id v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
   };
