@@ -58,11 +58,12 @@ PersistenceDiagram Engine::run() {
   auto t = Clock::now();
   report("dim 0", 0.3);
   out.pairs.reserve(std::size_t(minima_));
+  advise_huge_pages(out.pairs.data(), out.pairs.capacity() * sizeof(PersistencePair));
   dim0(out);
   // each pointer array and saddle list is read by its own dimension only
   out.stats.join_saddles = Id(joins_.size());
-  std::vector<std::uint32_t>().swap(joins_);
-  std::vector<std::uint32_t>().swap(minima_list_);
+  BigVector<std::uint32_t>().swap(joins_);
+  BigVector<std::uint32_t>().swap(minima_list_);
   minimum_index_ = {};
   const std::size_t end0 = out.pairs.size();
   out.stats.seconds_dim0 = seconds_since(t);
@@ -71,11 +72,12 @@ PersistenceDiagram Engine::run() {
   // the whole diagram at once (a maximum dies at most once; every dim-1 birth dies): no doubling, and
   // no copy of the largest array while it is full
   out.pairs.reserve(out.pairs.size() + std::size_t(maxima_) + births1_);
+  advise_huge_pages(out.pairs.data() + out.pairs.size(), (out.pairs.capacity() - out.pairs.size()) * sizeof(PersistencePair));
   dim2(out);
   out.stats.split_saddles = Id(splits_.size());
-  std::vector<std::uint8_t>().swap(codes_);
-  std::vector<std::uint32_t>().swap(splits_);
-  std::vector<std::uint32_t>().swap(maxima_list_);
+  BigVector<std::uint8_t>().swap(codes_);
+  BigVector<std::uint32_t>().swap(splits_);
+  BigVector<std::uint32_t>().swap(maxima_list_);
   maximum_index_ = {};
   const std::size_t end2 = out.pairs.size();
   out.stats.seconds_dim2 = seconds_since(t);
@@ -144,7 +146,7 @@ void Engine::classify_interior_row(Id first, int count, RowScratch& out) const {
 void Engine::classify() {
   codes_.resize(std::size_t(V_));
   const int nx = grid_.dims[0], ny = grid_.dims[1], nz = grid_.dims[2];
-  struct Local { std::vector<std::uint32_t> joins, splits, minima, maxima; std::size_t extra_lower = 0, extra_upper = 0; };
+  struct Local { BigVector<std::uint32_t> joins, splits, minima, maxima; std::size_t extra_lower = 0, extra_upper = 0; };
   tbb::enumerable_thread_specific<Local> locals;
   tbb::enumerable_thread_specific<RowScratch> scratch;
   tbb::parallel_for(tbb::blocked_range<int>(0, nz * ny), [&](const tbb::blocked_range<int>& r) {
@@ -216,8 +218,8 @@ void Engine::classify() {
 
 // Sorted as 64-bit keys (the value's bits made to order as the value, then the index: the filtration order
 // of vertex_less), where a comparison of two vertices reads the field at two scattered places.
-void Engine::sort_in_filtration_order(std::vector<std::uint32_t>& vertices, bool descending) const {
-  std::vector<std::uint64_t> keys(vertices.size());
+void Engine::sort_in_filtration_order(BigVector<std::uint32_t>& vertices, bool descending) const {
+  BigVector<std::uint64_t> keys(vertices.size());
   tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t i) {
     float value = f_[vertices[i]];
     if (value == 0.0f) value = 0.0f;  // -0 ties +0 in the field's order
@@ -272,7 +274,7 @@ void Engine::dim0(PersistenceDiagram& out) {
   global_min_ = Id(minima_list_.front());  // a box has at least one minimum
   for (std::uint32_t m : minima_list_)
     if (less(m, global_min_)) global_min_ = m;
-  std::vector<std::uint32_t> parent(minima_list_.size());
+  BigVector<std::uint32_t> parent(minima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   // Per join saddle, its lobes (the lowest vertex of each lower-link component, in filtration order) and the
   // minima their descents reach, found in parallel with the saddles in grid order (in filtration order they
@@ -280,8 +282,8 @@ void Engine::dim0(PersistenceDiagram& out) {
   const std::size_t J = joins_.size();
   auto lap = step_timer();
   struct Lobe { std::uint32_t low, root; };
-  std::vector<std::uint32_t> place;
-  const std::vector<Lobe> lobes = records_in_grid_order<Lobe>(
+  BigVector<std::uint32_t> place;
+  const BigVector<Lobe> lobes = records_in_grid_order<Lobe>(
       joins_,
       [&](std::uint32_t s) { return table_[lower_mask(s)].count; },
       [&](std::uint32_t s, Lobe* L, int count, RootCache& roots) {
@@ -431,8 +433,8 @@ void Engine::dim2(PersistenceDiagram& out) {
   // Cross triangles of all split saddles, computed in parallel, kept in saddle order: as in dim 0, the saddles
   // are visited in grid order, each writing to its own place. A saddle has one cross triangle per extra
   // upper-link component, so the places are known from the masks alone.
-  std::vector<std::uint32_t> place;
-  const std::vector<CrossTriangle> cross = records_in_grid_order<CrossTriangle>(
+  BigVector<std::uint32_t> place;
+  const BigVector<CrossTriangle> cross = records_in_grid_order<CrossTriangle>(
       splits_,
       [&](std::uint32_t s) { return table_[std::uint16_t(~lower_mask(s) & 0x3FFF)].count - 1; },
       [&](std::uint32_t s, CrossTriangle* out, int count, RootCache& roots) {
@@ -440,9 +442,9 @@ void Engine::dim2(PersistenceDiagram& out) {
           throw InternalError("a split saddle's star has fewer cross triangles than upper-link components");
       },
       place);
-  std::vector<std::uint32_t>().swap(place);
+  BigVector<std::uint32_t>().swap(place);
   lap("dim 2: cross triangles (parallel)");
-  std::vector<std::uint32_t> parent(maxima_list_.size());
+  BigVector<std::uint32_t> parent(maxima_list_.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const std::size_t first = out.pairs.size();
   constexpr std::size_t kAhead = 32;  // as in dim 0

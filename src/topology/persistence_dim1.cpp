@@ -167,7 +167,7 @@ EdgeKey Engine::birth_edge(std::uint32_t rank) const {
 
 // Adds `add` to the column `col` (both in descending rank order) modulo 2, into `out`.
 static void add_columns(const std::uint32_t* a, const std::uint32_t* a_end, const std::uint32_t* b,
-                        const std::uint32_t* b_end, std::vector<std::uint32_t>& out) {
+                        const std::uint32_t* b_end, BigVector<std::uint32_t>& out) {
   out.clear();
   while (a != a_end && b != b_end) {
     if (*a > *b) out.push_back(*a++);
@@ -200,12 +200,12 @@ void Engine::dim1(PersistenceDiagram& out) {
     pr.death = f_[s];
     pr.death_lobes = {lobe_vertex(d.s, d.lobe1), lobe_vertex(d.s, d.lobe2)};
   });
-  std::vector<Death1>().swap(deaths1_);
+  BigVector<Death1>().swap(deaths1_);
   lap("dim 1: death halves (parallel)");
   struct EdgeLess {
     bool operator()(const EdgeKey& a, const EdgeKey& b) const { return edge_less(a, b); }
   };
-  using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, EdgeLess>;
+  using Heap = std::priority_queue<EdgeKey, BigVector<EdgeKey>, EdgeLess>;
   // In parallel: each death triangle's boundary reduced to birth edges alone (each edge paired inside its
   // own lower star is replaced by the rest of its pair's cone; negative edges are dropped), kept as the birth
   // edges' ranks in descending order; the sequential pass below then only merges sorted rank lists. On rough
@@ -214,10 +214,10 @@ void Engine::dim1(PersistenceDiagram& out) {
   // rank is also another's, it is reduced further (kSharedBudget); otherwise the sequential pass reduces it,
   // from its triangle, only as far as it must. This part is order-free, so it runs in grid order:
   // neighbouring triangles share lower links and field memory, which the filtration order scatters.
-  std::vector<std::uint32_t> grid_order(n);
+  BigVector<std::uint32_t> grid_order(n);
   {
     struct Keyed { std::uint64_t key; std::uint32_t index; };
-    std::vector<Keyed> keyed(n);
+    BigVector<Keyed> keyed(n);
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
       keyed[i] = {morton_key(cx_.coords(out.pairs[base + i].death_vertex)), std::uint32_t(i)};
     });
@@ -231,9 +231,9 @@ void Engine::dim1(PersistenceDiagram& out) {
   // as its ranks go (its triangle gives the rest).
   constexpr std::uint32_t kPool = 0xFFFFFFFFu, kLazy = 0x80000000u;
   struct Where { std::uint32_t chunk, begin, end; };
-  std::vector<Where> where(n);
+  BigVector<Where> where(n);
   const std::size_t chunk = 2048, nchunks = (n + chunk - 1) / chunk;
-  std::vector<std::vector<std::uint32_t>> first(nchunks);
+  BigVector<BigVector<std::uint32_t>> first(nchunks);
   tbb::enumerable_thread_specific<std::unique_ptr<LinkCache>> caches;
   auto push_triangle = [&](Heap& heap, std::uint32_t i) {
     const auto tau = cx_.triangle_vertices(out.pairs[base + i].death_simplex);  // make_edge orders each edge
@@ -245,7 +245,7 @@ void Engine::dim1(PersistenceDiagram& out) {
   // true if it was reduced in full.
   // With `first_only`, it stops at the first rank (the pivot) as well.
   auto reduce_column = [&](Heap& heap, LinkCache& links, std::uint32_t i, std::size_t budget,
-                           std::vector<std::uint32_t>& entries, bool first_only = false) {
+                           BigVector<std::uint32_t>& entries, bool first_only = false) {
     while (!heap.empty()) heap.pop();
     push_triangle(heap, i);
     EdgeKey p;
@@ -275,7 +275,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     std::unique_ptr<LinkCache>& links = caches.local();
     if (!links) links = std::make_unique<LinkCache>();
     Heap heap;
-    std::vector<std::uint32_t> ranks;
+    BigVector<std::uint32_t> ranks;
     if (!reduce_column(heap, *links, grid_order[k * stride], kLongColumn, ranks)) ++long_ones;
     ++sampled;
   });
@@ -283,7 +283,7 @@ void Engine::dim1(PersistenceDiagram& out) {
   lap("dim 1: sample of column lengths");
   const std::size_t budget = lazy_pass ? kColumnBudget : std::numeric_limits<std::size_t>::max();
   in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
-    std::vector<std::uint32_t>& entries = first[c];
+    BigVector<std::uint32_t>& entries = first[c];
     const std::size_t begin = entries.size();
     const bool full = reduce_column(heap, links, i, budget, entries, lazy_pass);
     if (full && entries.size() == begin) throw InternalError("a dim-1 death triangle reduced to zero");
@@ -292,7 +292,7 @@ void Engine::dim1(PersistenceDiagram& out) {
   });
   lap("dim 1: columns (parallel)");
   if (lazy_columns > 0) {
-    std::vector<std::uint8_t> firsts(births1_, 0);  // how many columns start with each rank (0, 1, 2+)
+    BigVector<std::uint8_t> firsts(births1_, 0);  // how many columns start with each rank (0, 1, 2+)
     for (std::size_t i = 0; i < n; ++i)
       if (where[i].begin != where[i].end) {
         std::uint8_t& f = firsts[first[where[i].chunk & ~kLazy][where[i].begin]];
@@ -301,7 +301,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     in_parallel([&](std::size_t c, std::uint32_t i, Heap& heap, LinkCache& links) {
       Where& w = where[i];
       if (!(w.chunk & kLazy)) return;
-      std::vector<std::uint32_t>& entries = first[c];
+      BigVector<std::uint32_t>& entries = first[c];
       if (w.begin != w.end && firsts[entries[w.begin]] < 2) return;
       const std::size_t begin = entries.size();
       const bool full = reduce_column(heap, links, i, kSharedBudget, entries);
@@ -310,19 +310,19 @@ void Engine::dim1(PersistenceDiagram& out) {
       if (full) --lazy_columns;
     });
   }
-  std::vector<std::uint32_t>().swap(grid_order);
+  BigVector<std::uint32_t>().swap(grid_order);
   lap("dim 1: lazy columns (parallel)");
   out.stats.dim1_lazy_columns = Id(lazy_columns.load());
   if (lazy_columns == 0) {  // every rank is known: no birth edge is looked up again
-    std::vector<BirthBlock>().swap(birth_blocks_);
-    std::vector<BirthEntry>().swap(birth_by_vertex_);
+    BigVector<BirthBlock>().swap(birth_blocks_);
+    BigVector<BirthEntry>().swap(birth_by_vertex_);
   }
   report("dim 1", 0.8);
   // In filtration order: a column whose pivot is owned adds the owner's column until its pivot is free.
   // owner: per birth rank, the death whose column has it as pivot. Columns that needed additions move to
   // the pool (chunk kPool); one reduced on a heap keeps what is left below its pivot as raw edges.
-  std::vector<std::uint32_t> owner(births1_, kOutside), pool, sum, scratch;
-  std::vector<std::array<std::uint32_t, 2>> edge_pool;
+  BigVector<std::uint32_t> owner(births1_, kOutside), pool, sum, scratch;
+  BigVector<std::array<std::uint32_t, 2>> edge_pool;
   std::unordered_map<std::uint32_t, std::array<std::uint32_t, 2>> raw_edges;  // column -> its range in edge_pool
   auto column_of = [&](std::uint32_t i) {
     const Where& w = where[i];

@@ -17,8 +17,13 @@
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/topology/persistence.h"
 #include "link_table.h"
+#include "common/huge_pages.h"
 
 namespace chokeloops::detail {
+
+// The engine's arrays: those of a huge page or more are backed by huge pages (see common/huge_pages.h).
+template <class T>
+using BigVector = std::vector<T, HugePageAllocator<T>>;
 
 constexpr std::uint32_t kOutside = 0xFFFFFFFFu;  // the outside of the box: +inf, never dies
 using Clock = std::chrono::steady_clock;
@@ -163,13 +168,13 @@ class Engine {
   void classify();
   // The lower masks and steepest steps (slots, -1 for none) of `count` interior vertices of a row from `first`.
   struct RowScratch {
-    std::vector<std::uint32_t> lower;
-    std::vector<std::int32_t> lo, hi;
-    std::vector<float> lowest, highest;
+    BigVector<std::uint32_t> lower;
+    BigVector<std::int32_t> lo, hi;
+    BigVector<float> lowest, highest;
     void resize(std::size_t n) { lower.resize(n), lo.resize(n), hi.resize(n), lowest.resize(n), highest.resize(n); }
   };
   void classify_interior_row(Id first, int count, RowScratch& out) const;
-  void sort_in_filtration_order(std::vector<std::uint32_t>& vertices, bool descending) const;
+  void sort_in_filtration_order(BigVector<std::uint32_t>& vertices, bool descending) const;
   // Estimates the peak from the classification's counts; throws Error (exit code 3) over max_memory_.
   void guard_memory(PersistenceDiagram& out);
 
@@ -177,8 +182,8 @@ class Engine {
   // walks from many saddles run down the same long paths, and a vertex seen before ends a walk early.
   struct RootCache {
     static constexpr int kBits = 14;
-    std::vector<std::uint32_t> key = std::vector<std::uint32_t>(std::size_t(1) << kBits, kOutside);
-    std::vector<std::uint32_t> root = std::vector<std::uint32_t>(std::size_t(1) << kBits);
+    BigVector<std::uint32_t> key = BigVector<std::uint32_t>(std::size_t(1) << kBits, kOutside);
+    BigVector<std::uint32_t> root = BigVector<std::uint32_t>(std::size_t(1) << kBits);
     static std::size_t slot(std::uint32_t v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
   };
   // The minimum a steepest descent from v ends at (kDown), or the maximum an ascent ends at, or kOutside.
@@ -208,10 +213,10 @@ class Engine {
   // that a bucket holds about one extremum: two cache misses, where a binary search takes ~20 steps.
   // kOutside stays kOutside.
   struct ExtremumIndex {
-    const std::vector<std::uint32_t>* list = nullptr;
-    std::vector<std::uint32_t> start;
+    const BigVector<std::uint32_t>* list = nullptr;
+    BigVector<std::uint32_t> start;
     int shift = 0;
-    void build(const std::vector<std::uint32_t>& sorted, Id vertex_count) {
+    void build(const BigVector<std::uint32_t>& sorted, Id vertex_count) {
       list = &sorted;
       shift = 0;
       while ((std::uint64_t(vertex_count) >> (shift + 1)) >= sorted.size() && shift < 31) ++shift;
@@ -227,7 +232,7 @@ class Engine {
     }
   };
   // Union-find over extrema; a root's parent is itself, or kOutside for a set merged into the outside.
-  static std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+  static std::uint32_t find(BigVector<std::uint32_t>& parent, std::uint32_t x) {
     while (x != kOutside && parent[x] != x) {
       std::uint32_t up = parent[x];
       if (up != kOutside && parent[up] != up) parent[x] = parent[up];
@@ -242,11 +247,11 @@ class Engine {
   // in grid order, where neighbours share their stars' and walks' memory (filtration order scatters them over
   // the grid); the records are then moved to their places in a pass of copies.
   template <class Record, class Count, class Write>
-  static std::vector<Record> records_in_grid_order(const std::vector<std::uint32_t>& saddles, Count&& count,
-                                                   Write&& write, std::vector<std::uint32_t>& place) {
+  static BigVector<Record> records_in_grid_order(const BigVector<std::uint32_t>& saddles, Count&& count,
+                                                   Write&& write, BigVector<std::uint32_t>& place) {
     const std::size_t n = saddles.size();
     struct Visit { std::uint32_t vertex, index; };
-    std::vector<Visit> visits(n);
+    BigVector<Visit> visits(n);
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { visits[i] = {saddles[i], std::uint32_t(i)}; });
     tbb::parallel_sort(visits.begin(), visits.end(), [](const Visit& a, const Visit& b) { return a.vertex < b.vertex; });
     auto in_parallel = [&](auto&& body) {
@@ -254,10 +259,10 @@ class Engine {
         for (std::size_t k = r.begin(); k != r.end(); ++k) body(k);
       });
     };
-    std::vector<std::uint32_t> at(n + 1, 0);  // where visit k's records are in grid order
+    BigVector<std::uint32_t> at(n + 1, 0);  // where visit k's records are in grid order
     in_parallel([&](std::size_t k) { at[k + 1] = std::uint32_t(count(visits[k].vertex)); });
     for (std::size_t k = 0; k < n; ++k) at[k + 1] += at[k];
-    std::vector<Record> in_grid(at[n]);
+    BigVector<Record> in_grid(at[n]);
     tbb::enumerable_thread_specific<RootCache> caches;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
       RootCache& roots = caches.local();
@@ -267,7 +272,7 @@ class Engine {
     place.assign(n + 1, 0);
     in_parallel([&](std::size_t k) { place[visits[k].index + 1] = at[k + 1] - at[k]; });
     for (std::size_t i = 0; i < n; ++i) place[i + 1] += place[i];
-    std::vector<Record> records(place[n]);
+    BigVector<Record> records(place[n]);
     in_parallel([&](std::size_t k) {
       std::copy(in_grid.begin() + at[k], in_grid.begin() + at[k + 1], records.begin() + place[visits[k].index]);
     });
@@ -313,7 +318,7 @@ class Engine {
     static constexpr int kBits = 14;
     // the key beside its link: one cache line read where two arrays cost two misses
     struct Entry { std::uint32_t key = kOutside; LowerLinkInfo info; };
-    std::vector<Entry> entries = std::vector<Entry>(std::size_t(1) << kBits);
+    BigVector<Entry> entries = BigVector<Entry>(std::size_t(1) << kBits);
     const LowerLinkInfo& get(const Engine& engine, Id v);
     static std::size_t slot(Id v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
   };
@@ -375,21 +380,21 @@ class Engine {
   std::array<Id, kSlotTable> slot_key_{};  // 0: empty (no slot's delta is 0)
   std::array<std::int8_t, kSlotTable> slot_of_key_{};
   std::array<std::array<std::int8_t, 14>, 14> link_edge_index_{};
-  std::vector<std::uint8_t> codes_;  // steps down and up, freed after dim 2
-  std::vector<std::uint32_t> joins_, splits_;
-  std::vector<std::uint32_t> minima_list_, maxima_list_;  // sorted by vertex; freed after their dimension
+  BigVector<std::uint8_t> codes_;  // steps down and up, freed after dim 2
+  BigVector<std::uint32_t> joins_, splits_;
+  BigVector<std::uint32_t> minima_list_, maxima_list_;  // sorted by vertex; freed after their dimension
   ExtremumIndex minimum_index_, maximum_index_;
   Id minima_ = 0, maxima_ = 0;
   Id global_min_ = 0;
   std::size_t extra_lower_ = 0, extra_upper_ = 0;  // extra link components of join and split saddles
-  std::vector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
-  std::vector<BirthBlock> birth_blocks_;    // a bit per vertex: in birth_list_ (most lookups are misses)
-  std::vector<BirthEntry> birth_by_vertex_;  // birth_list_'s entries in vertex order
+  BigVector<BirthSlots> birth_list_;  // join saddles with dim-1 birth edges, in filtration order
+  BigVector<BirthBlock> birth_blocks_;    // a bit per vertex: in birth_list_ (most lookups are misses)
+  BigVector<BirthEntry> birth_by_vertex_;  // birth_list_'s entries in vertex order
   std::size_t births1_ = 0;
   // A dim-1 death triangle (s, s + delta_[a], s + delta_[b]) of split saddle s, its highest vertex, and the
   // link slots of the two sides it joins (-1: outside the box). 8 bytes: one per dim-1 pair.
   struct Death1 { std::uint32_t s; std::uint8_t a, b; std::int8_t lobe1, lobe2; };
-  std::vector<Death1> deaths1_;
+  BigVector<Death1> deaths1_;
 };
 
 }  // namespace chokeloops::detail
