@@ -247,8 +247,8 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   // far, the birth slots of the join saddles (20 with their entry in vertex order); while a dimension's
   // saddles are visited in grid order, their visit order and two places (16) and each record twice (dim 0: a
   // lobe and its minimum, 8; dim 2: a cross triangle, 16); at the end of dim 2 the cross triangles and the
-  // dim-1 deaths (8); then the field, the whole diagram and per dim-1 death its Z-order key, column place,
-  // ~3 ranks, owner and pool share (36).
+  // dim-1 deaths (8); then the field, the whole diagram and per dim-1 death its record, Z-order key, column
+  // place, ~3 ranks, owner and pool share (44).
   const std::size_t V = std::size_t(V_), bits = V / 4, birth_slots = joins_.size() * 20;
   const std::size_t pair = sizeof(PersistencePair), extrema = std::size_t(minima_ + maxima_) * 12;
   const std::size_t classify = V * 5 + extrema + (joins_.size() + splits_.size()) * 4;
@@ -258,7 +258,7 @@ void Engine::guard_memory(PersistenceDiagram& out) {
   const std::size_t dim2 = V * 5 + bits + std::size_t(maxima_) * 8 + splits_.size() * 4 + birth_slots +
                            (minima - 1) * pair +
                            std::max(cross * 2 + splits_.size() * 16, cross + (pairs - births1) * pair + births1 * 8);
-  const std::size_t dim1 = V * 4 + bits + pairs * pair + births1 * 36 + birth_slots;
+  const std::size_t dim1 = V * 4 + bits + pairs * pair + births1 * 44 + birth_slots;
   const std::size_t need = std::max({dim0, dim2, dim1}) + (std::size_t(32) << 20);
   out.stats.estimated_bytes = need;
   if (need <= max_memory_) return;

@@ -200,7 +200,6 @@ void Engine::dim1(PersistenceDiagram& out) {
     pr.death = f_[s];
     pr.death_lobes = {lobe_vertex(d.s, d.lobe1), lobe_vertex(d.s, d.lobe2)};
   });
-  BigVector<Death1>().swap(deaths1_);
   lap("dim 1: death halves (parallel)");
   struct EdgeLess {
     bool operator()(const EdgeKey& a, const EdgeKey& b) const { return edge_less(a, b); }
@@ -235,11 +234,14 @@ void Engine::dim1(PersistenceDiagram& out) {
   const std::size_t chunk = 2048, nchunks = (n + chunk - 1) / chunk;
   BigVector<BigVector<std::uint32_t>> first(nchunks);
   tbb::enumerable_thread_specific<std::unique_ptr<LinkCache>> caches;
+  // From the death's 8-byte record, kept until the additions: in grid order the columns read their deaths
+  // at random, and the 80-byte pairs missed the cache at each.
   auto push_triangle = [&](Heap& heap, std::uint32_t i) {
-    const auto tau = cx_.triangle_vertices(out.pairs[base + i].death_simplex);  // make_edge orders each edge
-    heap.push(make_edge(tau[0], tau[1]));
-    heap.push(make_edge(tau[0], tau[2]));
-    heap.push(make_edge(tau[1], tau[2]));
+    const Death1& d = deaths1_[i];
+    const Id a = d.s + delta_[d.a], b = d.s + delta_[d.b];
+    heap.push(make_edge(d.s, a));
+    heap.push(make_edge(d.s, b));
+    heap.push(make_edge(a, b));
   };
   // Reduces column i from its triangle, appending its ranks to `entries`, popping at most `budget` edges;
   // true if it was reduced in full.
@@ -403,6 +405,7 @@ void Engine::dim1(PersistenceDiagram& out) {
     }
     owner[r] = i;
   }
+  BigVector<Death1>().swap(deaths1_);
   lap("dim 1: additions (sequential)");
   // the birth half of each pair, a join saddle at a time: its birth edges are its lower slots in order
   tbb::parallel_for(std::size_t(0), birth_list_.size(), [&](std::size_t q) {
