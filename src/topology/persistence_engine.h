@@ -17,11 +17,11 @@
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/topology/persistence.h"
 #include "link_table.h"
-#include "common/huge_pages.h"
+#include "common/huge_page_allocator.h"
 
 namespace chokeloops::detail {
 
-// The engine's arrays: those of a huge page or more are backed by huge pages (see common/huge_pages.h).
+// The engine's arrays: those of a huge page or more are backed by huge pages (see common/huge_page_allocator.h).
 template <class T>
 using BigVector = std::vector<T, HugePageAllocator<T>>;
 
