@@ -45,7 +45,7 @@ struct HugePageAllocator {
   HugePageAllocator(const HugePageAllocator<U>&) {}
   static std::size_t mapped_bytes(std::size_t n) { return (n * sizeof(T) + kHugePage - 1) & ~(kHugePage - 1); }
   T* allocate(std::size_t n) {
-    if (n > std::size_t(-1) / sizeof(T) - kHugePage) throw std::bad_alloc();
+    if (n > (std::size_t(-1) - 2 * kHugePage) / sizeof(T)) throw std::bad_alloc();  // rounded up and mapped with a page more
     if (n * sizeof(T) < kHugePage) {
       if (void* p = std::malloc(n ? n * sizeof(T) : 1)) return static_cast<T*>(p);
       throw std::bad_alloc();
@@ -56,7 +56,7 @@ struct HugePageAllocator {
     if (raw == MAP_FAILED) throw std::bad_alloc();
     const std::uintptr_t start = std::uintptr_t(raw), aligned = (start + kHugePage - 1) & ~std::uintptr_t(kHugePage - 1);
     if (aligned > start) munmap(raw, aligned - start);
-    if (const std::uintptr_t tail = start + bytes + kHugePage - (aligned + bytes); tail > 0)
+    if (const std::uintptr_t tail = start + kHugePage - aligned; tail > 0)
       munmap(reinterpret_cast<void*>(aligned + bytes), tail);
     madvise(reinterpret_cast<void*>(aligned), bytes, MADV_HUGEPAGE);
     return reinterpret_cast<T*>(aligned);

@@ -204,7 +204,7 @@ void Engine::dim1(PersistenceDiagram& out) {
   struct EdgeLess {
     bool operator()(const EdgeKey& a, const EdgeKey& b) const { return edge_less(a, b); }
   };
-  using Heap = std::priority_queue<EdgeKey, BigVector<EdgeKey>, EdgeLess>;
+  using Heap = std::priority_queue<EdgeKey, std::vector<EdgeKey>, EdgeLess>;
   // In parallel: each death triangle's boundary reduced to birth edges alone (each edge paired inside its
   // own lower star is replaced by the rest of its pair's cone; negative edges are dropped), kept as the birth
   // edges' ranks in descending order; the sequential pass below then only merges sorted rank lists. On rough

@@ -21,7 +21,8 @@
 
 namespace chokeloops::detail {
 
-// The engine's arrays: those of a huge page or more are backed by huge pages (see common/huge_page_allocator.h).
+// The engine's grid-sized arrays (saddle lists, records, columns): those of a huge page or more are backed by
+// huge pages (see common/huge_page_allocator.h). Per-thread scratch stays in std::vector.
 template <class T>
 using BigVector = std::vector<T, HugePageAllocator<T>>;
 
@@ -168,9 +169,9 @@ class Engine {
   void classify();
   // The lower masks and steepest steps (slots, -1 for none) of `count` interior vertices of a row from `first`.
   struct RowScratch {
-    BigVector<std::uint32_t> lower;
-    BigVector<std::int32_t> lo, hi;
-    BigVector<float> lowest, highest;
+    std::vector<std::uint32_t> lower;
+    std::vector<std::int32_t> lo, hi;
+    std::vector<float> lowest, highest;
     void resize(std::size_t n) { lower.resize(n), lo.resize(n), hi.resize(n), lowest.resize(n), highest.resize(n); }
   };
   void classify_interior_row(Id first, int count, RowScratch& out) const;
@@ -182,8 +183,8 @@ class Engine {
   // walks from many saddles run down the same long paths, and a vertex seen before ends a walk early.
   struct RootCache {
     static constexpr int kBits = 14;
-    BigVector<std::uint32_t> key = BigVector<std::uint32_t>(std::size_t(1) << kBits, kOutside);
-    BigVector<std::uint32_t> root = BigVector<std::uint32_t>(std::size_t(1) << kBits);
+    std::vector<std::uint32_t> key = std::vector<std::uint32_t>(std::size_t(1) << kBits, kOutside);
+    std::vector<std::uint32_t> root = std::vector<std::uint32_t>(std::size_t(1) << kBits);
     static std::size_t slot(std::uint32_t v) { return std::size_t(std::uint64_t(v) * 0x9E3779B97F4A7C15ull >> (64 - kBits)); }
   };
   // The minimum a steepest descent from v ends at (kDown), or the maximum an ascent ends at, or kOutside.
