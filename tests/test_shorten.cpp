@@ -167,6 +167,16 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
     worst = std::max(worst, best);
   }
   EXPECT_LE(worst, leash + g.voxel_size);  // no point moved farther than the leash (plus one edge)
+  // The loop tracer slides a loop on only when it stopped at its band's edge: the unleashed loop found the
+  // thinnest section inside its band, the leashed one was held back by the leash.
+  EXPECT_FALSE(far.at_band_edge);
+  EXPECT_TRUE(near.at_band_edge);
+  // A loop starting at the thinnest section stays clear of its leash.
+  auto at_neck = snap_polyline_to_edge_path(m, wiggly_meridian({0.5, 0.5, 0.5}, 0.5, 0.09, M_PI, 0.0, 1));
+  auto settled = shorten_loop(m, adj, at_neck, ShortenOptions{leash, 60, 400});
+  EXPECT_GT(settled.rings, 0);
+  EXPECT_FALSE(settled.at_band_edge);
+  EXPECT_NEAR(settled.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
 }
 
 TEST(Shorten, DoubleTorusHandleMeridianStaysEssential) {

@@ -145,7 +145,8 @@ class LoopTracer {
       so.max_move = c.depth + 3 * h;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       if (best.rings == 0) loop.note = "not shortened: no annulus band around the loop";
-      if (best.rings > 0 && options.slide) slide_to_narrowest(best, so, c.depth + 2 * h);
+      // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
+      if (best.rings > 0 && options.slide && best.at_band_edge) slide_to_narrowest(best, so, c.depth + 2 * h);
       if (best.points.size() >= 3) loop.points = best.points;
       loop.edge_path = best.edge_path;
     } else {
@@ -173,6 +174,7 @@ class LoopTracer {
     bool moved = false;
     // Small steps from the current best, repeated while they help, follow a tube that bends.
     double travelled = 0;
+    const double length_at_start = best.length;
     for (int round = 0; round < 6 && travelled < reach; ++round) {
       describe_loop(probe);
       const auto n = probe.normal;
@@ -217,6 +219,7 @@ class LoopTracer {
       travelled += moved_by;
       probe.points = best.points;
     }
+    if (debug_) std::fprintf(stderr, "slide: moved %d travelled %g reach %g length %g gain %g\n", int(moved), travelled, reach, best.length, 1 - best.length / length_at_start);
     if (!moved) return;
     try {
       ShortenResult full = shorten_loop(S_, A_, best.edge_path, so);

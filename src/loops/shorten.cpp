@@ -167,8 +167,10 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       }
     }
   }
+  int descents = 0;
   for (int it = 0; it < 16 && s >= 0; ++it) {
     double L;
+    ++descents;
     auto P = sh.shortest_loop_through(s, L);
     if (P.empty() || !(L < best_len - 1e-12)) break;
     best = P, best_len = L;
@@ -183,6 +185,16 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   if (best.empty()) return R;
   R.edge_path = best;
   R.edge_path_length = best_len;
+  {
+    const double edge = best_len / double(best.size());  // the loop's mean edge length
+    for (int v : best) {
+      const std::size_t i = std::size_t(rid.at(v));
+      if (ring[i] >= rings - 1 || (!dist.empty() && dist[i] > opt.max_move - 2 * edge)) {
+        R.at_band_edge = true;
+        break;
+      }
+    }
+  }
   R.points = loop_points(mesh, best);
   R.length = closed_length(R.points);
 
@@ -197,6 +209,12 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   std::vector<Shortener::Apex> apexes;
   double L = sh.relax(S, 0, sp, apexes);
   int flat_rounds = 0, rounds = 0;
+  // On a surface of revolution (a hole's wall, a tube of even radius) the loop drifts across a family of
+  // nearly equal sections, each round of swaps gaining a millionth of its length: hundreds of rounds for
+  // a loop already within 1e-4 of its final length. Stop when the last rounds together gain too little.
+  constexpr int kProgressWindow = 8;
+  constexpr double kMinProgress = 1e-5;  // of the length, over the window
+  std::vector<double> round_length{L};
   for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
     std::vector<int> S2 = S;
     std::vector<double> s2 = sp;
@@ -219,6 +237,10 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = std::min(L, L2);
     R.swaps += n;
     ++rounds;
+    round_length.push_back(L);
+    if (rounds >= kProgressWindow &&
+        round_length[std::size_t(rounds - kProgressWindow)] - L < kMinProgress * L)
+      break;
   }
   // The windows kept every crossing but the one the first funnel was cut at; a funnel over the whole
   // strip settles that one too.
@@ -229,8 +251,8 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   double Lp = closed_length(pts);
   clock.lap(StepClock::kPolish);
   if (debug) {
-    std::fprintf(stderr, "edge loop %.9f (%zu vertices), strip %zu faces, relaxed %.9f, polished %.9f\n", R.length,
-                 best.size(), S.size(), L, Lp);
+    std::fprintf(stderr, "edge loop %.9f (%zu vertices), strip %zu faces, relaxed %.9f, polished %.9f; band %zu vertices, %d rings, %d descents\n", R.length,
+                 best.size(), S.size(), L, Lp, sh.band.global.size(), rings, descents);
     const auto& t = clock.ms;
     std::fprintf(stderr,
                  "shorten steps ms: region %.3f candidates %.3f bands %.3f arcs %.3f searches %.3f swaps %.3f (%d rounds) "

@@ -55,6 +55,9 @@ struct ShortenResult {
   double input_length = 0, edge_path_length = 0, length = 0;
   int rings = 0;                  // band width actually used; 0 when no annulus band was found
   int swaps = 0;                  // strip side swaps performed
+  // Step 2's loop comes within an edge or two of the band's edge (its last ring, or max_move): a shorter
+  // loop may lie beyond the band. When false, the loop is the band's own local minimum.
+  bool at_band_edge = false;
 };
 
 // `loop`: cyclic sequence of surface vertices joined by mesh edges (first vertex not repeated).
