@@ -271,8 +271,11 @@ Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, 
   V3 e1 = std::abs(n[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
   e1 = (e1 - e1.dot(n) * n).normalized();
   const V3 e2 = n.cross(e1);
-  // crossing point on each cut mesh edge, keyed by its vertex pair; a segment per cut face
-  std::map<std::pair<int, int>, int> point_id;
+  // crossing point on each cut mesh edge, keyed by its vertex pair; a segment per cut face. A hash map: a
+  // plane across a large surface cuts tens of thousands of edges, and a tree's lookups were a tenth of
+  // the pierced block's loop stage (ids follow the faces' order, so the hashing order never shows)
+  std::unordered_map<std::uint64_t, int> point_id;
+  point_id.reserve(faces.size());
   std::vector<V3> pts;
   std::vector<std::array<int, 2>> seg;
   auto sd = [&](int v) {
@@ -280,14 +283,13 @@ Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, 
     return s == 0 ? 1e-300 : s;
   };
   auto cut = [&](int a, int b) {
-    std::pair<int, int> key(std::min(a, b), std::max(a, b));
-    auto it = point_id.find(key);
-    if (it != point_id.end()) return it->second;
-    const double sa = sd(key.first), sb = sd(key.second);
+    const int lo = std::min(a, b), hi = std::max(a, b);
+    const auto [it, inserted] = point_id.try_emplace(std::uint64_t(std::uint32_t(lo)) << 32 | std::uint32_t(hi), int(pts.size()));
+    if (!inserted) return it->second;
+    const double sa = sd(lo), sb = sd(hi);
     const double t = sa / (sa - sb);
-    pts.push_back(v3(surface.vertices[std::size_t(key.first)]) * (1 - t) + v3(surface.vertices[std::size_t(key.second)]) * t);
-    point_id[key] = int(pts.size()) - 1;
-    return int(pts.size()) - 1;
+    pts.push_back(v3(surface.vertices[std::size_t(lo)]) * (1 - t) + v3(surface.vertices[std::size_t(hi)]) * t);
+    return it->second;
   };
   for (int fi : faces) {
     const auto& f = surface.faces[std::size_t(fi)];

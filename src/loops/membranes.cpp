@@ -457,8 +457,17 @@ void describe_loop(Loop& loop) {
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology, int genus) {
   // Every generator's cycle, once: each generator's loop is checked against the other side's.
+  const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
+  auto t_stage = std::chrono::steady_clock::now();
+  auto lap = [&](const char* what) {
+    if (!debug) return;
+    const auto now = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "loop stage: %s %.0f ms\n", what, std::chrono::duration<double, std::milli>(now - t_stage).count());
+    t_stage = now;
+  };
   detail::GeneratorCycles cycles;
   if (topology) detail::make_generator_cycles(grid, chokes, cycles);
+  lap("generator cycles");
   LoopTracer tracer(grid, surface, adjacency, topology, topology ? &cycles.by_side : nullptr);
   std::vector<Loop> loops(chokes.size());
   // Longest first, each thread taking the next choke when it is free: a few chokes can cost most of the
@@ -492,6 +501,12 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
    }
   }, tbb::simple_partitioner());
+  if (debug) {
+    double sum = 0, mx = 0;
+    for (const Loop& l : loops) sum += l.trace_ms, mx = std::max(mx, l.trace_ms);
+    std::fprintf(stderr, "loop stage: traces' own times sum %.0f ms, longest %.0f ms, %d workers\n", sum, mx, workers);
+  }
+  lap("traces");
   if (topology && genus > 0) {
     int handles = 0, tunnels = 0;
     for (const Choke& c : chokes)
@@ -499,6 +514,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     if (handles == genus && tunnels == genus && int(cycles.by_side[0].size()) == genus && int(cycles.by_side[1].size()) == genus)
       detail::drop_dependent_generators(loops, cycles);
   }
+  lap("independence");
   return loops;
 }
 

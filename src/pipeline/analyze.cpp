@@ -90,6 +90,7 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   stage("loops", 0);
   LoopContext context;
   prepare_loops(r, std::move(adjacency), std::move(face_label), context);
+  if (std::getenv("CHOKELOOPS_DEBUG_MEMBRANES")) std::fprintf(stderr, "loop stage: prepare %.0f ms\n", ms_since(t));
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
                         r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
   r.timings_ms["loops"] = ms_since(t);
