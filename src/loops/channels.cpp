@@ -12,6 +12,7 @@
 
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
+#include "plane_sections.h"
 
 namespace chokeloops {
 
@@ -264,236 +265,11 @@ bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& 
   return found;
 }
 
-namespace {
-Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, const std::array<double, 3>& pa,
-                     const std::array<double, 3>& na, double max_radius) {
-  const V3 p = v3(pa), n = v3(na).normalized();
-  V3 e1 = std::abs(n[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
-  e1 = (e1 - e1.dot(n) * n).normalized();
-  const V3 e2 = n.cross(e1);
-  // crossing point on each cut mesh edge, keyed by its vertex pair; a segment per cut face. A hash map: a
-  // plane across a large surface cuts tens of thousands of edges, and a tree's lookups were a tenth of
-  // the pierced block's loop stage (ids follow the faces' order, so the hashing order never shows)
-  std::unordered_map<std::uint64_t, int> point_id;
-  point_id.reserve(faces.size());
-  std::vector<V3> pts;
-  std::vector<std::array<int, 2>> seg;
-  auto sd = [&](int v) {
-    double s = (v3(surface.vertices[std::size_t(v)]) - p).dot(n);
-    return s == 0 ? 1e-300 : s;
-  };
-  auto cut = [&](int a, int b) {
-    const int lo = std::min(a, b), hi = std::max(a, b);
-    const auto [it, inserted] = point_id.try_emplace(std::uint64_t(std::uint32_t(lo)) << 32 | std::uint32_t(hi), int(pts.size()));
-    if (!inserted) return it->second;
-    const double sa = sd(lo), sb = sd(hi);
-    const double t = sa / (sa - sb);
-    pts.push_back(v3(surface.vertices[std::size_t(lo)]) * (1 - t) + v3(surface.vertices[std::size_t(hi)]) * t);
-    return it->second;
-  };
-  for (int fi : faces) {
-    const auto& f = surface.faces[std::size_t(fi)];
-    const V3 a = v3(surface.vertices[std::size_t(f[0])]);
-    if ((a - p).norm() > max_radius) continue;
-    int crossing[2], m = 0;
-    for (int e = 0; e < 3; ++e) {
-      const int u = f[e], w = f[(e + 1) % 3];
-      if ((sd(u) > 0) != (sd(w) > 0) && m < 2) crossing[m++] = cut(u, w);
-    }
-    if (m == 2) seg.push_back({crossing[0], crossing[1]});
-  }
-  std::vector<std::vector<int>> at(pts.size());
-  for (std::size_t s = 0; s < seg.size(); ++s)
-    for (int e : seg[s]) at[std::size_t(e)].push_back(int(s));
-  std::vector<char> used(seg.size(), 0);
-  Polyline3 best;
-  double best_area = 1e300;
-  for (std::size_t s0 = 0; s0 < seg.size(); ++s0) {
-    if (used[s0]) continue;
-    std::vector<int> cyc;
-    bool closed = false;
-    std::size_t s = s0;
-    int cur = seg[s][0];
-    for (;;) {
-      used[s] = 1;
-      cyc.push_back(cur);
-      const int next = seg[s][0] == cur ? seg[s][1] : seg[s][0];
-      if (at[std::size_t(next)].size() != 2) break;  // cut off by max_radius (or non-manifold)
-      const int t = at[std::size_t(next)][0] == int(s) ? at[std::size_t(next)][1] : at[std::size_t(next)][0];
-      cur = next;
-      if (std::size_t(t) == s0) { closed = true; break; }
-      if (used[std::size_t(t)]) break;
-      s = std::size_t(t);
-    }
-    if (!closed || cyc.size() < 3) continue;
-    // winding number of the curve around p and its area, in the plane
-    double wind = 0, area = 0;
-    for (std::size_t i = 0; i < cyc.size(); ++i) {
-      const V3 a = pts[std::size_t(cyc[i])] - p, b = pts[std::size_t(cyc[(i + 1) % cyc.size()])] - p;
-      const double ax = a.dot(e1), ay = a.dot(e2), bx = b.dot(e1), by = b.dot(e2);
-      wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-      area += ax * by - ay * bx;
-    }
-    if (std::abs(wind) < M_PI) continue;
-    area = std::abs(area) / 2;
-    if (area < best_area) {
-      best_area = area;
-      best.clear();
-      for (int i : cyc) best.push_back(arr(pts[std::size_t(i)]));
-    }
-  }
-  return best;
-}
-
-// Faces bucketed by their first vertex in cubic cells, so that each tunnel looks only at the faces near it.
-class FaceCells {
- public:
-  FaceCells(const SurfaceMesh& surface, double cell) : cell_(cell) {
-    lo_ = {1e300, 1e300, 1e300};
-    std::array<double, 3> hi{-1e300, -1e300, -1e300};
-    for (auto& v : surface.vertices)
-      for (int a = 0; a < 3; ++a) lo_[a] = std::min(lo_[a], v[a]), hi[a] = std::max(hi[a], v[a]);
-    if (surface.vertices.empty()) lo_ = hi = {0, 0, 0};
-    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, int((hi[a] - lo_[a]) / cell_) + 1);
-    std::vector<int> id(surface.faces.size());
-    start_.assign(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
-    for (std::size_t f = 0; f < surface.faces.size(); ++f) {
-      id[f] = cell_of(surface.vertices[std::size_t(surface.faces[f][0])]);
-      start_[std::size_t(id[f]) + 1]++;
-    }
-    for (std::size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
-    items_.resize(surface.faces.size());
-    std::vector<int> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t f = 0; f < surface.faces.size(); ++f) items_[std::size_t(fill[std::size_t(id[f])]++)] = int(f);
-  }
-  // Faces in the cells the plane (p, n) crosses within r of p (their first vertex is within r), in a fixed
-  // order: a slab of cells instead of the ball's volume. Needs cells at least as wide as any face.
-  std::vector<int> near_plane(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& nrm,
-                              double r) const {
-    std::vector<int> out;
-    int a = 0;
-    for (int q = 1; q < 3; ++q)
-      if (std::abs(nrm[q]) > std::abs(nrm[a])) a = q;
-    const int u = (a + 1) % 3, v = (a + 2) % 3;
-    int lo_i[3], hi_i[3];
-    for (int q = 0; q < 3; ++q) {
-      lo_i[q] = std::max(0, int(std::floor((p[q] - r - lo_[q]) / cell_)));
-      hi_i[q] = std::min(n_[q] - 1, int(std::floor((p[q] + r - lo_[q]) / cell_)));
-      if (lo_i[q] > hi_i[q]) return out;
-    }
-    const double r2 = r * r;
-    for (int iu = lo_i[u]; iu <= hi_i[u]; ++iu)
-      for (int iv = lo_i[v]; iv <= hi_i[v]; ++iv) {
-        // The plane's height along axis a over this column's four corners.
-        double amin = 1e300, amax = -1e300;
-        for (int corner = 0; corner < 4; ++corner) {
-          const double xu = lo_[u] + (iu + (corner & 1)) * cell_, xv = lo_[v] + (iv + (corner >> 1)) * cell_;
-          const double xa = p[a] - (nrm[u] * (xu - p[u]) + nrm[v] * (xv - p[v])) / nrm[a];
-          amin = std::min(amin, xa), amax = std::max(amax, xa);
-        }
-        const int ia0 = std::max(lo_i[a], int(std::floor((amin - lo_[a]) / cell_)) - 1);
-        const int ia1 = std::min(hi_i[a], int(std::floor((amax - lo_[a]) / cell_)) + 1);
-        for (int ia = ia0; ia <= ia1; ++ia) {
-          int ijk[3];
-          ijk[a] = ia, ijk[u] = iu, ijk[v] = iv;
-          const std::size_t c = std::size_t(ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]));
-          for (int t = start_[c]; t < start_[c + 1]; ++t) {
-            const int f = items_[std::size_t(t)];
-            const auto& w = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
-            const double d2 = (w[0] - p[0]) * (w[0] - p[0]) + (w[1] - p[1]) * (w[1] - p[1]) + (w[2] - p[2]) * (w[2] - p[2]);
-            if (d2 > r2) continue;
-            // Only faces the plane cuts hold a piece of the section.
-            int above = 0;
-            for (int q = 0; q < 3; ++q) {
-              const auto& x = surface.vertices[std::size_t(surface.faces[std::size_t(f)][q])];
-              above += (x[0] - p[0]) * nrm[0] + (x[1] - p[1]) * nrm[1] + (x[2] - p[2]) * nrm[2] >= 0;  // as section_of counts 0
-            }
-            if (above == 1 || above == 2) out.push_back(f);
-          }
-        }
-      }
-    return out;
-  }
-
-  // faces whose first vertex is within r of p, in increasing order
-  std::vector<int> near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) const {
-    std::vector<int> out;
-    int a0[3], a1[3];
-    for (int a = 0; a < 3; ++a) {
-      a0[a] = std::max(0, int(std::floor((p[a] - r - lo_[a]) / cell_)));
-      a1[a] = std::min(n_[a] - 1, int(std::floor((p[a] + r - lo_[a]) / cell_)));
-      if (a0[a] > a1[a]) return out;
-    }
-    for (int k = a0[2]; k <= a1[2]; ++k)
-      for (int j = a0[1]; j <= a1[1]; ++j)
-        for (int i = a0[0]; i <= a1[0]; ++i) {
-          const std::size_t c = std::size_t(i + n_[0] * (j + n_[1] * k));
-          for (int t = start_[c]; t < start_[c + 1]; ++t) {
-            const int f = items_[std::size_t(t)];
-            const auto& v = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
-            const double d2 = (v[0] - p[0]) * (v[0] - p[0]) + (v[1] - p[1]) * (v[1] - p[1]) + (v[2] - p[2]) * (v[2] - p[2]);
-            if (d2 <= r * r) out.push_back(f);
-          }
-        }
-    std::sort(out.begin(), out.end());
-    return out;
-  }
-
- private:
-  int cell_of(const std::array<double, 3>& v) const {
-    int ijk[3];
-    for (int a = 0; a < 3; ++a) ijk[a] = std::clamp(int((v[a] - lo_[a]) / cell_), 0, n_[a] - 1);
-    return ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]);
-  }
-  double cell_;
-  std::array<double, 3> lo_{};
-  std::array<int, 3> n_{};
-  std::vector<int> start_, items_;
-};
-}  // namespace
-
-Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
-                             double max_radius) {
-  return section_of(surface, FaceCells(surface, 2.0).near(surface, p, max_radius + 1), p, n, max_radius);
-}
-
-struct SurfaceSections::Cells {
-  FaceCells cells;
-};
-
-namespace {
-// Cells as wide as the longest face edge (near_plane's one-cell margin covers a face) and at least 1/128
-// of the surface's extent (so that a wide section reads few thousand columns).
-double section_cell_size(const SurfaceMesh& surface) {
-  double longest = 0, extent = 0;
-  for (const auto& f : surface.faces)
-    for (int e = 0; e < 3; ++e) {
-      const auto &a = surface.vertices[std::size_t(f[e])], &b = surface.vertices[std::size_t(f[(e + 1) % 3])];
-      longest = std::max(longest, std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
-    }
-  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (const auto& w : surface.vertices)
-    for (int q = 0; q < 3; ++q) lo[q] = std::min(lo[q], w[q]), hi[q] = std::max(hi[q], w[q]);
-  for (int q = 0; q < 3; ++q) extent = std::max(extent, hi[q] - lo[q]);
-  return std::max({longest * 1.001, extent / 128, 1e-12});
-}
-}  // namespace
-
-SurfaceSections::SurfaceSections(const SurfaceMesh& surface)
-    : surface_(surface), cells_(new Cells{FaceCells(surface, section_cell_size(surface))}) {}
-SurfaceSections::~SurfaceSections() = default;
-
-Polyline3 SurfaceSections::around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius) const {
-  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (!(len > 0) || surface_.faces.empty()) return {};
-  const std::array<double, 3> unit{n[0] / len, n[1] / len, n[2] / len};
-  return section_of(surface_, cells_->cells.near_plane(surface_, p, unit, max_radius), p, unit, max_radius);
-}
 
 namespace {
 // On a bumpy wall with gaps between atoms the plane normal to the axis can leak out through a gap; planes
 // tilted up to 40 degrees are tried too and the shortest closed curve around the bottleneck is kept.
-Polyline3 best_section(const SurfaceMesh& surface, const FaceCells& cells, const V3& p, const V3& axis, double rb) {
+Polyline3 best_section(const SurfaceMesh& surface, const detail::FaceCells& cells, const V3& p, const V3& axis, double rb) {
   const double R = rb + 3.5;
   std::vector<int> faces = cells.near(surface, arr(p), R + 1);
   V3 e1 = std::abs(axis[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
@@ -505,7 +281,7 @@ Polyline3 best_section(const SurfaceMesh& surface, const FaceCells& cells, const
     for (int k = 0; k < (tilt ? 6 : 1); ++k) {
       const double t = tilt * M_PI / 180, ph = k * M_PI / 3;
       const V3 n = std::cos(t) * axis + std::sin(t) * (std::cos(ph) * e1 + std::sin(ph) * e2);
-      Polyline3 sec = section_of(surface, faces, arr(p), arr(n), R);
+      Polyline3 sec = detail::section_of(surface, faces, arr(p), arr(n), R);
       if (sec.empty()) continue;
       const double len = closed_length(sec);
       if (len < best_len) best_len = len, best = std::move(sec);
@@ -530,7 +306,7 @@ std::vector<Channel> analyze_channels(const ScalarGrid& grid, const SurfaceMesh&
     if (chokes[i].side == Side::Tunnel) tunnel.push_back(int(i));
   std::vector<Channel> out(tunnel.size());
   const double h = grid.voxel_size;
-  const FaceCells cells(surface, 2.0);
+  const detail::FaceCells cells(surface, 2.0);
   tbb::parallel_for(std::size_t(0), tunnel.size(), [&](std::size_t t) {
     Channel& ch = out[t];
     const Choke& choke = chokes[std::size_t(tunnel[t])];

@@ -416,7 +416,7 @@ class LoopTracer {
   SurfaceTopology* T_;  // null: generators are not checked while their curve is chosen
   // The surface's faces bucketed for plane sections, made by the first generator that needs them.
   const SurfaceSections& sections() const {
-    std::call_once(sections_once_, [&] { sections_ = std::make_unique<SurfaceSections>(S_); });
+    std::call_once(sections_once_, [&] { sections_ = std::make_unique<SurfaceSections>(S_, &A_); });
     return *sections_;
   }
   mutable std::once_flag sections_once_;

@@ -20,6 +20,7 @@
 
 #include "chokeloops/field/molecular_field.h"
 #include "chokeloops/loops/membranes.h"
+#include "chokeloops/loops/plane_sections.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
 
@@ -81,24 +82,5 @@ Loop section_loop(const Choke& choke, const Polyline3& section, const SurfaceMes
 // The index-2 critical point of f nearest `x0` within `search_radius` (false if none).
 bool refine_bottleneck(const AtomLocator& locator, const std::array<double, 3>& x0, double search_radius,
                        Channel& out);
-
-// The closed curve where the plane (p, n) cuts the surface that winds around p and encloses the least area
-// (empty if none within `max_radius` of p).
-Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
-                             double max_radius);
-
-// The same curve for many planes over one bucketing of the surface's faces: each section reads only the
-// cells its plane crosses. Thread-safe (const).
-class SurfaceSections {
- public:
-  explicit SurfaceSections(const SurfaceMesh& surface);
-  ~SurfaceSections();
-  Polyline3 around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius) const;
-
- private:
-  struct Cells;
-  const SurfaceMesh& surface_;
-  std::unique_ptr<Cells> cells_;
-};
 
 }  // namespace chokeloops

@@ -1,0 +1,489 @@
+// Plane sections of a surface (plane_sections.h): the faces in cells, the section of a face set, and the
+// sections of many planes over one bucketing, found from the faces along a ray.
+#include "plane_sections.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <Eigen/Dense>
+
+#include "chokeloops/loops/plane_sections.h"
+
+namespace chokeloops {
+namespace detail {
+
+namespace {
+using V3 = Eigen::Vector3d;
+V3 v3(const std::array<double, 3>& a) { return V3(a[0], a[1], a[2]); }
+std::array<double, 3> arr(const V3& v) { return {v[0], v[1], v[2]}; }
+}  // namespace
+
+Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, const std::array<double, 3>& pa,
+                     const std::array<double, 3>& na, double max_radius) {
+  const V3 p = v3(pa), n = v3(na).normalized();
+  V3 e1 = std::abs(n[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
+  e1 = (e1 - e1.dot(n) * n).normalized();
+  const V3 e2 = n.cross(e1);
+  // crossing point on each cut mesh edge, keyed by its vertex pair; a segment per cut face. A hash map: a
+  // plane across a large surface cuts tens of thousands of edges, and a tree's lookups were a tenth of
+  // the pierced block's loop stage (ids follow the faces' order, so the hashing order never shows)
+  std::unordered_map<std::uint64_t, int> point_id;
+  point_id.reserve(faces.size());
+  std::vector<V3> pts;
+  std::vector<std::array<int, 2>> seg;
+  auto sd = [&](int v) {
+    double s = (v3(surface.vertices[std::size_t(v)]) - p).dot(n);
+    return s == 0 ? 1e-300 : s;
+  };
+  auto cut = [&](int a, int b) {
+    const int lo = std::min(a, b), hi = std::max(a, b);
+    const auto [it, inserted] = point_id.try_emplace(std::uint64_t(std::uint32_t(lo)) << 32 | std::uint32_t(hi), int(pts.size()));
+    if (!inserted) return it->second;
+    const double sa = sd(lo), sb = sd(hi);
+    const double t = sa / (sa - sb);
+    pts.push_back(v3(surface.vertices[std::size_t(lo)]) * (1 - t) + v3(surface.vertices[std::size_t(hi)]) * t);
+    return it->second;
+  };
+  for (int fi : faces) {
+    const auto& f = surface.faces[std::size_t(fi)];
+    const V3 a = v3(surface.vertices[std::size_t(f[0])]);
+    if ((a - p).norm() > max_radius) continue;
+    int crossing[2], m = 0;
+    for (int e = 0; e < 3; ++e) {
+      const int u = f[e], w = f[(e + 1) % 3];
+      if ((sd(u) > 0) != (sd(w) > 0) && m < 2) crossing[m++] = cut(u, w);
+    }
+    if (m == 2) seg.push_back({crossing[0], crossing[1]});
+  }
+  std::vector<std::vector<int>> at(pts.size());
+  for (std::size_t s = 0; s < seg.size(); ++s)
+    for (int e : seg[s]) at[std::size_t(e)].push_back(int(s));
+  std::vector<char> used(seg.size(), 0);
+  Polyline3 best;
+  double best_area = 1e300;
+  for (std::size_t s0 = 0; s0 < seg.size(); ++s0) {
+    if (used[s0]) continue;
+    std::vector<int> cyc;
+    bool closed = false;
+    std::size_t s = s0;
+    int cur = seg[s][0];
+    for (;;) {
+      used[s] = 1;
+      cyc.push_back(cur);
+      const int next = seg[s][0] == cur ? seg[s][1] : seg[s][0];
+      if (at[std::size_t(next)].size() != 2) break;  // cut off by max_radius (or non-manifold)
+      const int t = at[std::size_t(next)][0] == int(s) ? at[std::size_t(next)][1] : at[std::size_t(next)][0];
+      cur = next;
+      if (std::size_t(t) == s0) { closed = true; break; }
+      if (used[std::size_t(t)]) break;
+      s = std::size_t(t);
+    }
+    if (!closed || cyc.size() < 3) continue;
+    // winding number of the curve around p and its area, in the plane
+    double wind = 0, area = 0;
+    for (std::size_t i = 0; i < cyc.size(); ++i) {
+      const V3 a = pts[std::size_t(cyc[i])] - p, b = pts[std::size_t(cyc[(i + 1) % cyc.size()])] - p;
+      const double ax = a.dot(e1), ay = a.dot(e2), bx = b.dot(e1), by = b.dot(e2);
+      wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+      area += ax * by - ay * bx;
+    }
+    if (std::abs(wind) < M_PI) continue;
+    area = std::abs(area) / 2;
+    if (area < best_area) {
+      best_area = area;
+      best.clear();
+      for (int i : cyc) best.push_back(arr(pts[std::size_t(i)]));
+    }
+  }
+  return best;
+}
+
+FaceCells::FaceCells(const SurfaceMesh& surface, double cell) : cell_(cell) {
+  lo_ = {1e300, 1e300, 1e300};
+  std::array<double, 3> hi{-1e300, -1e300, -1e300};
+  for (auto& v : surface.vertices)
+    for (int a = 0; a < 3; ++a) lo_[a] = std::min(lo_[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  if (surface.vertices.empty()) lo_ = hi = {0, 0, 0};
+  for (int a = 0; a < 3; ++a) n_[a] = std::max(1, int((hi[a] - lo_[a]) / cell_) + 1);
+  std::vector<int> id(surface.faces.size());
+  start_.assign(std::size_t(n_[0]) * n_[1] * n_[2] + 1, 0);
+  for (std::size_t f = 0; f < surface.faces.size(); ++f) {
+    id[f] = cell_of(surface.vertices[std::size_t(surface.faces[f][0])]);
+    start_[std::size_t(id[f]) + 1]++;
+  }
+  for (std::size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
+  items_.resize(surface.faces.size());
+  std::vector<int> fill(start_.begin(), start_.end() - 1);
+  for (std::size_t f = 0; f < surface.faces.size(); ++f) items_[std::size_t(fill[std::size_t(id[f])]++)] = int(f);
+}
+
+std::array<int, 3> FaceCells::cell_coords(const std::array<double, 3>& v) const {
+  std::array<int, 3> ijk;
+  for (int a = 0; a < 3; ++a) ijk[a] = std::clamp(int((v[a] - lo_[a]) / cell_), 0, n_[a] - 1);
+  return ijk;
+}
+
+int FaceCells::cell_of(const std::array<double, 3>& v) const {
+  const auto ijk = cell_coords(v);
+  return ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]);
+}
+
+FaceCells::PlaneQuery FaceCells::plane_query(const std::array<double, 3>& p, const std::array<double, 3>& nrm, double r) const {
+  PlaneQuery q;
+  q.p = p, q.nrm = nrm, q.r = r;
+  q.a = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(nrm[k]) > std::abs(nrm[q.a])) q.a = k;
+  q.u = (q.a + 1) % 3, q.v = (q.a + 2) % 3;
+  q.empty = false;
+  for (int k = 0; k < 3; ++k) {
+    q.lo[k] = std::max(0, int(std::floor((p[k] - r - lo_[k]) / cell_)));
+    q.hi[k] = std::min(n_[k] - 1, int(std::floor((p[k] + r - lo_[k]) / cell_)));
+    if (q.lo[k] > q.hi[k]) q.empty = true;
+  }
+  return q;
+}
+
+void FaceCells::column_range(const PlaneQuery& q, int iu, int iv, int& ia0, int& ia1) const {
+  const int a = q.a, u = q.u, v = q.v;
+  const auto& p = q.p;
+  const auto& nrm = q.nrm;
+  // The plane's height along axis a over this column's four corners.
+  double amin = 1e300, amax = -1e300;
+  for (int corner = 0; corner < 4; ++corner) {
+    const double xu = lo_[u] + (iu + (corner & 1)) * cell_, xv = lo_[v] + (iv + (corner >> 1)) * cell_;
+    const double xa = p[a] - (nrm[u] * (xu - p[u]) + nrm[v] * (xv - p[v])) / nrm[a];
+    amin = std::min(amin, xa), amax = std::max(amax, xa);
+  }
+  ia0 = std::max(q.lo[a], int(std::floor((amin - lo_[a]) / cell_)) - 1);
+  ia1 = std::min(q.hi[a], int(std::floor((amax - lo_[a]) / cell_)) + 1);
+}
+
+namespace {
+// Within r of p (by its first vertex) and cut by the plane: the faces that hold a piece of the section.
+bool near_and_cut(const SurfaceMesh& surface, const FaceCells::PlaneQuery& q, int f) {
+  const auto& p = q.p;
+  const auto& nrm = q.nrm;
+  const auto& w = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
+  const double d2 = (w[0] - p[0]) * (w[0] - p[0]) + (w[1] - p[1]) * (w[1] - p[1]) + (w[2] - p[2]) * (w[2] - p[2]);
+  if (d2 > q.r * q.r) return false;
+  int above = 0;
+  for (int k = 0; k < 3; ++k) {
+    const auto& x = surface.vertices[std::size_t(surface.faces[std::size_t(f)][k])];
+    above += (x[0] - p[0]) * nrm[0] + (x[1] - p[1]) * nrm[1] + (x[2] - p[2]) * nrm[2] >= 0;  // as section_of counts 0
+  }
+  return above == 1 || above == 2;
+}
+}  // namespace
+
+std::vector<int> FaceCells::near_plane(const SurfaceMesh& surface, const std::array<double, 3>& p,
+                                       const std::array<double, 3>& nrm, double r) const {
+  std::vector<int> out;
+  const PlaneQuery q = plane_query(p, nrm, r);
+  if (q.empty) return out;
+  for (int iu = q.lo[q.u]; iu <= q.hi[q.u]; ++iu)
+    for (int iv = q.lo[q.v]; iv <= q.hi[q.v]; ++iv) {
+      int ia0, ia1;
+      column_range(q, iu, iv, ia0, ia1);
+      for (int ia = ia0; ia <= ia1; ++ia) {
+        int ijk[3];
+        ijk[q.a] = ia, ijk[q.u] = iu, ijk[q.v] = iv;
+        const std::size_t c = std::size_t(ijk[0] + n_[0] * (ijk[1] + n_[1] * ijk[2]));
+        for (int t = start_[c]; t < start_[c + 1]; ++t)
+          if (near_and_cut(surface, q, items_[std::size_t(t)])) out.push_back(items_[std::size_t(t)]);
+      }
+    }
+  return out;
+}
+
+bool FaceCells::listed(const SurfaceMesh& surface, const PlaneQuery& q, int f, std::uint64_t& key) const {
+  if (q.empty) return false;
+  const auto ijk = cell_coords(surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])]);
+  for (int k = 0; k < 3; ++k)
+    if (ijk[k] < q.lo[k] || ijk[k] > q.hi[k]) return false;
+  int ia0, ia1;
+  column_range(q, ijk[q.u], ijk[q.v], ia0, ia1);
+  if (ijk[q.a] < ia0 || ijk[q.a] > ia1) return false;
+  if (!near_and_cut(surface, q, f)) return false;
+  // near_plane's order: columns by u then v, cells up the column, faces rising within a cell
+  const std::uint64_t column = std::uint64_t(ijk[q.u]) * std::uint64_t(n_[q.v]) + std::uint64_t(ijk[q.v]);
+  key = (column * std::uint64_t(n_[q.a]) + std::uint64_t(ijk[q.a])) << 32 | std::uint32_t(f);
+  return true;
+}
+
+std::vector<int> FaceCells::near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) const {
+  std::vector<int> out;
+  int a0[3], a1[3];
+  for (int a = 0; a < 3; ++a) {
+    a0[a] = std::max(0, int(std::floor((p[a] - r - lo_[a]) / cell_)));
+    a1[a] = std::min(n_[a] - 1, int(std::floor((p[a] + r - lo_[a]) / cell_)));
+    if (a0[a] > a1[a]) return out;
+  }
+  for (int k = a0[2]; k <= a1[2]; ++k)
+    for (int j = a0[1]; j <= a1[1]; ++j)
+      for (int i = a0[0]; i <= a1[0]; ++i) {
+        const std::size_t c = std::size_t(i + n_[0] * (j + n_[1] * k));
+        for (int t = start_[c]; t < start_[c + 1]; ++t) {
+          const int f = items_[std::size_t(t)];
+          const auto& v = surface.vertices[std::size_t(surface.faces[std::size_t(f)][0])];
+          const double d2 = (v[0] - p[0]) * (v[0] - p[0]) + (v[1] - p[1]) * (v[1] - p[1]) + (v[2] - p[2]) * (v[2] - p[2]);
+          if (d2 <= r * r) out.push_back(f);
+        }
+      }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void FaceCells::near_segment(const std::array<double, 3>& a, const std::array<double, 3>& b, double reach,
+                             std::vector<int>& out) const {
+  out.clear();
+  const V3 A = v3(a), B = v3(b), d = B - A;
+  const double len2 = d.squaredNorm(), R = reach + cell_ * std::sqrt(3.0) / 2;
+  auto distance_to_segment = [&](const V3& x) {
+    const double t = len2 > 0 ? std::clamp((x - A).dot(d) / len2, 0.0, 1.0) : 0.0;
+    return (x - (A + t * d)).norm();
+  };
+  // Every point of the segment is within a quarter cell of a step, so a cell centre within R of the
+  // segment is within R + cell/4 of a step.
+  const int steps = std::max(1, int(std::ceil(std::sqrt(len2) / (cell_ / 2))));
+  const double margin = R + cell_ / 4;
+  std::vector<std::size_t> cells;
+  for (int s = 0; s <= steps; ++s) {
+    const V3 x = A + d * (double(s) / steps);
+    int c0[3], c1[3];
+    for (int k = 0; k < 3; ++k) {
+      c0[k] = std::max(0, int(std::floor((x[k] - margin - lo_[k]) / cell_ - 0.5)));
+      c1[k] = std::min(n_[k] - 1, int(std::ceil((x[k] + margin - lo_[k]) / cell_ - 0.5)));
+    }
+    for (int k = c0[2]; k <= c1[2]; ++k)
+      for (int j = c0[1]; j <= c1[1]; ++j)
+        for (int i = c0[0]; i <= c1[0]; ++i) {
+          const V3 centre(lo_[0] + (i + 0.5) * cell_, lo_[1] + (j + 0.5) * cell_, lo_[2] + (k + 0.5) * cell_);
+          if (distance_to_segment(centre) <= R) cells.push_back(std::size_t(i + n_[0] * (j + n_[1] * k)));
+        }
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  for (std::size_t c : cells)
+    for (int t = start_[c]; t < start_[c + 1]; ++t) out.push_back(items_[std::size_t(t)]);
+}
+
+namespace {
+
+// The section of section_of over near_plane's faces, found without reading them all: a closed curve that
+// winds around p crosses the ray from p along the plane's first axis, so only the curves through the faces
+// that ray meets are followed, face to face across their cut edges. A plane across a large surface cuts
+// tens of thousands of faces, the curves around p a few thousand. The curve, its first point and its
+// direction, and the choice among curves (least area, first in near_plane's order on a tie) are section_of's:
+// the same numbers. False where that cannot be promised (an edge of more than two faces): section_of then.
+class RaySection {
+ public:
+  RaySection(const SurfaceMesh& surface, const MeshAdjacency& adjacency, const FaceCells& cells,
+             const std::array<double, 3>& p, const std::array<double, 3>& unit, double max_radius)
+      : S_(surface), A_(adjacency), cells_(cells), q_(cells.plane_query(p, unit, max_radius)), max_radius_(max_radius),
+        p_(v3(p)), n_(v3(unit).normalized()) {
+    // section_of's frame
+    e1_ = std::abs(n_[0]) < 0.9 ? V3(1, 0, 0) : V3(0, 1, 0);
+    e1_ = (e1_ - e1_.dot(n_) * n_).normalized();
+    e2_ = n_.cross(e1_);
+  }
+
+  bool run(Polyline3& out) {
+    out.clear();
+    if (q_.empty) return true;
+    // A face the curve crosses the ray in holds a point of the ray within a face's size of its first vertex,
+    // and that vertex is within max_radius of p.
+    const double cell = cells_.cell();
+    std::vector<int> candidates;
+    cells_.near_segment(arr(p_), arr(p_ + (max_radius_ + 2 * cell) * e1_), cell, candidates);
+    std::sort(candidates.begin(), candidates.end());
+    const double tol = 1e-9 * (max_radius_ + cell);
+    std::vector<int> seeds;
+    for (int f : candidates) {
+      Cut c;
+      if (!cut_of(f, c)) continue;
+      const V3 a = point_on(f, c.edge[0]) - p_, b = point_on(f, c.edge[1]) - p_;
+      const double ax = a.dot(e1_), ay = a.dot(e2_), bx = b.dot(e1_), by = b.dot(e2_);
+      if (std::min(ay, by) > tol || std::max(ay, by) < -tol || std::max(ax, bx) < -tol) continue;
+      seeds.push_back(f);
+    }
+    struct Curve { std::uint64_t key; int face; };
+    std::vector<Curve> closed;
+    std::unordered_set<int> seen;
+    for (int f : seeds) {
+      if (seen.count(f)) continue;
+      Curve c{~std::uint64_t(0), -1};
+      bool is_closed = false;
+      if (!follow(f, seen, is_closed, c.key, c.face)) return false;
+      if (is_closed) closed.push_back(c);
+    }
+    std::sort(closed.begin(), closed.end(), [](const Curve& a, const Curve& b) { return a.key < b.key; });
+    double best_area = 1e300;
+    for (const Curve& c : closed) {
+      std::vector<V3> pts;
+      if (!points_from(c.face, pts)) return false;
+      if (pts.size() < 3) continue;
+      double wind = 0, area = 0;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const V3 a = pts[i] - p_, b = pts[(i + 1) % pts.size()] - p_;
+        const double ax = a.dot(e1_), ay = a.dot(e2_), bx = b.dot(e1_), by = b.dot(e2_);
+        wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+        area += ax * by - ay * bx;
+      }
+      if (std::abs(wind) < M_PI) continue;
+      area = std::abs(area) / 2;
+      if (area < best_area) {
+        best_area = area;
+        out.clear();
+        for (const V3& x : pts) out.push_back(arr(x));
+      }
+    }
+    return true;
+  }
+
+ private:
+  struct Cut {
+    int edge[2];  // the face's cut edges (k: from corner k to k+1), in section_of's order
+    std::uint64_t key;
+  };
+
+  double sd(int v) const {
+    double s = (v3(S_.vertices[std::size_t(v)]) - p_).dot(n_);
+    return s == 0 ? 1e-300 : s;
+  }
+  // section_of's segment of face f, if near_plane lists f and section_of keeps it.
+  bool cut_of(int f, Cut& c) const {
+    if (!cells_.listed(S_, q_, f, c.key)) return false;
+    const auto& F = S_.faces[std::size_t(f)];
+    if ((v3(S_.vertices[std::size_t(F[0])]) - p_).norm() > max_radius_) return false;
+    int m = 0;
+    for (int e = 0; e < 3; ++e)
+      if ((sd(F[e]) > 0) != (sd(F[(e + 1) % 3]) > 0) && m < 2) c.edge[m++] = e;
+    return m == 2;
+  }
+  V3 point_on(int f, int e) const {
+    const auto& F = S_.faces[std::size_t(f)];
+    const int lo = std::min(F[e], F[(e + 1) % 3]), hi = std::max(F[e], F[(e + 1) % 3]);
+    const double sa = sd(lo), sb = sd(hi);
+    const double t = sa / (sa - sb);
+    return v3(S_.vertices[std::size_t(lo)]) * (1 - t) + v3(S_.vertices[std::size_t(hi)]) * t;
+  }
+  // Across edge e of face f: the next face of the curve and the edge it is entered by; false at the curve's
+  // end (a boundary, or a face section_of leaves out); `fallback` at an edge of more than two faces.
+  bool across(int f, int e, int& g, int& entry, Cut& cg, bool& fallback) const {
+    const int t = A_.twin[std::size_t(3 * f + e)];
+    if (t < 0) {
+      const auto& F = S_.faces[std::size_t(f)];
+      const int a = F[e], b = F[(e + 1) % 3];
+      int sharing = 0;
+      for (int k = A_.vf_start[std::size_t(a)]; k < A_.vf_start[std::size_t(a) + 1]; ++k) {
+        const auto& G = S_.faces[std::size_t(A_.vf[std::size_t(k)])];
+        sharing += G[0] == b || G[1] == b || G[2] == b;
+      }
+      fallback = sharing != 1;
+      return false;
+    }
+    g = MeshAdjacency::face(t), entry = t % 3;
+    if (!cut_of(g, cg)) return false;
+    if (cg.edge[0] != entry && cg.edge[1] != entry) return fallback = true, false;
+    return true;
+  }
+  // The curve through seed face f: marks its faces seen; when it closes, its first face in near_plane's order.
+  bool follow(int f, std::unordered_set<int>& seen, bool& is_closed, std::uint64_t& min_key, int& min_face) const {
+    Cut c0;
+    cut_of(f, c0);
+    seen.insert(f);
+    min_key = c0.key, min_face = f;
+    const std::size_t limit = S_.faces.size() + 1;
+    for (int dir = 1; dir >= 0; --dir) {
+      int g = f, e = c0.edge[dir];
+      for (std::size_t steps = 0;; ++steps) {
+        int h, entry;
+        Cut ch;
+        bool fallback = false;
+        if (!across(g, e, h, entry, ch, fallback)) {
+          if (fallback) return false;
+          break;  // an open end: walk the other way to mark the rest
+        }
+        if (h == f) { is_closed = true; return true; }
+        if (steps > limit || !seen.insert(h).second) return false;  // not a simple curve: leave it to section_of
+        if (ch.key < min_key) min_key = ch.key, min_face = h;
+        g = h, e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
+      }
+    }
+    return true;
+  }
+  // The curve's points as section_of lists them: from face f's first cut edge, leaving by its second.
+  bool points_from(int f, std::vector<V3>& pts) const {
+    Cut c0;
+    cut_of(f, c0);
+    pts.push_back(point_on(f, c0.edge[0]));
+    int g = f, e = c0.edge[1];
+    for (std::size_t steps = 0; steps <= S_.faces.size(); ++steps) {
+      int h, entry;
+      Cut ch;
+      bool fallback = false;
+      if (!across(g, e, h, entry, ch, fallback)) return false;
+      if (h == f) return true;
+      pts.push_back(point_on(g, e));
+      g = h, e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
+    }
+    return false;
+  }
+
+  const SurfaceMesh& S_;
+  const MeshAdjacency& A_;
+  const FaceCells& cells_;
+  const FaceCells::PlaneQuery q_;
+  const double max_radius_;
+  const V3 p_, n_;
+  V3 e1_, e2_;
+};
+
+// Cells as wide as the longest face edge (near_plane's one-cell margin covers a face) and at least 1/128
+// of the surface's extent (so that a wide section reads few thousand columns).
+double section_cell_size(const SurfaceMesh& surface) {
+  double longest = 0, extent = 0;
+  for (const auto& f : surface.faces)
+    for (int e = 0; e < 3; ++e) {
+      const auto &a = surface.vertices[std::size_t(f[e])], &b = surface.vertices[std::size_t(f[(e + 1) % 3])];
+      longest = std::max(longest, std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+    }
+  std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& w : surface.vertices)
+    for (int q = 0; q < 3; ++q) lo[q] = std::min(lo[q], w[q]), hi[q] = std::max(hi[q], w[q]);
+  for (int q = 0; q < 3; ++q) extent = std::max(extent, hi[q] - lo[q]);
+  return std::max({longest * 1.001, extent / 128, 1e-12});
+}
+
+}  // namespace
+}  // namespace detail
+
+Polyline3 cross_section_loop(const SurfaceMesh& surface, const std::array<double, 3>& p, const std::array<double, 3>& n,
+                             double max_radius) {
+  return detail::section_of(surface, detail::FaceCells(surface, 2.0).near(surface, p, max_radius + 1), p, n, max_radius);
+}
+
+struct SurfaceSections::Cells {
+  detail::FaceCells cells;
+};
+
+SurfaceSections::SurfaceSections(const SurfaceMesh& surface, const MeshAdjacency* adjacency)
+    : surface_(surface), adjacency_(adjacency), cells_(new Cells{detail::FaceCells(surface, detail::section_cell_size(surface))}) {}
+SurfaceSections::~SurfaceSections() = default;
+
+Polyline3 SurfaceSections::around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius,
+                                  bool by_ray) const {
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0) || surface_.faces.empty()) return {};
+  const std::array<double, 3> unit{n[0] / len, n[1] / len, n[2] / len};
+  if (adjacency_ && by_ray) {
+    Polyline3 out;
+    if (detail::RaySection(surface_, *adjacency_, cells_->cells, p, unit, max_radius).run(out)) return out;
+  }
+  return detail::section_of(surface_, cells_->cells.near_plane(surface_, p, unit, max_radius), p, unit, max_radius);
+}
+
+}  // namespace chokeloops
