@@ -12,7 +12,7 @@ namespace {
 // The flood is bound by the reads of its cells, so a narrower word is a smaller working set.
 template <class Word>
 FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
-                        bool by_distance, FloodBox& box, std::vector<Word>& cell) {
+                        bool by_distance, FloodBox& box, std::vector<Word>& cell, const RegionBounds* bounds) {
   const float* f = grid.values.data();
   const bool handle = c.side == Side::Handle;
   const Id s = c.saddle;
@@ -25,6 +25,8 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   for (int a = 0; a < 3; ++a) {
     lo[a] = std::max(0, sc[a] - r);
     hi[a] = std::min(grid.dims[a] - 1, sc[a] + r);
+    if (bounds) lo[a] = std::max(lo[a], bounds->lo[a]), hi[a] = std::min(hi[a], bounds->hi[a]);
+    if (hi[a] < lo[a]) return FloodOutcome::Grow;  // the saddle's region is empty here: no lobe to flood
     n[a] = hi[a] - lo[a] + 1;
   }
   const Id base = box.base = cx.vertex(lo[0], lo[1], lo[2]);
@@ -210,8 +212,28 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
 
 }  // namespace
 
+std::array<RegionBounds, 2> region_bounds(const ScalarGrid& grid) {
+  const auto& d = grid.dims;
+  std::array<RegionBounds, 2> out;
+  for (auto& b : out) b.lo = {d[0], d[1], d[2]}, b.hi = {-1, -1, -1};
+  for (int k = 0; k < d[2]; ++k)
+    for (int j = 0; j < d[1]; ++j) {
+      const float* row = grid.values.data() + grid.index(0, j, k);
+      for (int i = 0; i < d[0]; ++i) {
+        RegionBounds& b = out[row[i] <= 0 ? 0 : 1];
+        const std::array<int, 3> p{i, j, k};
+        for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], p[a]), b.hi[a] = std::max(b.hi[a], p[a]);
+      }
+    }
+  // Every Freudenthal neighbour is one step away on each axis.
+  for (auto& b : out)
+    for (int a = 0; a < 3; ++a)
+      if (b.hi[a] >= 0) b.lo[a] = std::max(0, b.lo[a] - 1), b.hi[a] = std::min(d[a] - 1, b.hi[a] + 1);
+  return out;
+}
+
 FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
-                             bool by_distance, FloodBox& box) {
+                             bool by_distance, FloodBox& box, const RegionBounds* bounds) {
   // The levels from the saddle's value to the surface's (flood_with), and 0 and one past the last.
   const double levels =
       std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / FloodBox::kLevelsPerVoxel) + 3;
@@ -220,10 +242,10 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
   static thread_local std::vector<std::uint32_t> cell32;
   if (levels < double(std::size_t(1) << (16 - FloodBox::kLevelShift))) {
     box.cell16 = &cell16, box.cell = nullptr;
-    return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell16);
+    return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell16, bounds);
   }
   box.cell = &cell32, box.cell16 = nullptr;
-  return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell32);
+  return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell32, bounds);
 }
 
 }  // namespace chokeloops::detail
