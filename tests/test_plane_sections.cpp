@@ -5,6 +5,7 @@
 // torus, the section square to the tube around a point on its core circle is a circle of the tube's radius.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -12,6 +13,7 @@
 #include "chokeloops/loops/plane_sections.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
+#include "loops/plane_sections.h"
 
 using namespace chokeloops;
 
@@ -56,6 +58,41 @@ TEST(PlaneSections, FromARayEqualsTheWholePlanesCutOnAPiercedBlock) {
 TEST(PlaneSections, FromARayEqualsTheWholePlanesCutOnATangleCube) {
   const Counts c = compare_ray_with_plane(analytic::tangle_cube(), 64, 2);
   EXPECT_GT(c.sections, 40);  // 53 of 450
+}
+
+// The faces near a segment, against every face's first vertex: none within reach of it is left out, for
+// segments inside, across and beyond the surface's box, along the axes and slanted.
+TEST(PlaneSections, FacesNearASegmentMissNoneWithinReach) {
+  const ScalarGrid grid = sample_field({64, 64, 64}, analytic::tangle_cube());
+  const SurfaceMesh surface = extract_zero_surface(grid);
+  const double cell = 1.0 / 50;
+  const detail::FaceCells cells(surface, cell);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> coord(-0.2, 1.2);
+  auto distance_to_segment = [](const std::array<double, 3>& x, const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    double dd = 0, t = 0;
+    for (int k = 0; k < 3; ++k) dd += (b[k] - a[k]) * (b[k] - a[k]), t += (x[k] - a[k]) * (b[k] - a[k]);
+    t = dd > 0 ? std::clamp(t / dd, 0.0, 1.0) : 0;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += std::pow(x[k] - (a[k] + t * (b[k] - a[k])), 2);
+    return std::sqrt(d2);
+  };
+  int near_total = 0;
+  for (int k = 0; k < 60; ++k) {
+    std::array<double, 3> a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)};
+    if (k % 6 == 0) b = {a[0], a[1], 1.1};  // along an axis
+    if (k % 6 == 1) b = a;                  // a point
+    const double reach = k % 2 ? cell : 1.7 * cell;
+    std::vector<int> near;
+    cells.near_segment(a, b, reach, near);
+    std::sort(near.begin(), near.end());
+    for (std::size_t f = 0; f < surface.faces.size(); ++f) {
+      if (distance_to_segment(surface.vertices[std::size_t(surface.faces[f][0])], a, b) > reach) continue;
+      ++near_total;
+      EXPECT_TRUE(std::binary_search(near.begin(), near.end(), int(f))) << "segment " << k << " face " << f;
+    }
+  }
+  EXPECT_GT(near_total, 1000);
 }
 
 TEST(PlaneSections, SquareToATorusTubeIsACircleOfTheTubesRadius) {

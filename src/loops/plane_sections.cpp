@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -239,35 +240,67 @@ std::vector<int> FaceCells::near(const SurfaceMesh& surface, const std::array<do
 void FaceCells::near_segment(const std::array<double, 3>& a, const std::array<double, 3>& b, double reach,
                              std::vector<int>& out) const {
   out.clear();
-  const V3 A = v3(a), B = v3(b), d = B - A;
-  const double len2 = d.squaredNorm(), R = reach + cell_ * std::sqrt(3.0) / 2;
-  auto distance_to_segment = [&](const V3& x) {
-    const double t = len2 > 0 ? std::clamp((x - A).dot(d) / len2, 0.0, 1.0) : 0.0;
-    return (x - (A + t * d)).norm();
-  };
-  // Every point of the segment is within a quarter cell of a step, so a cell centre within R of the
-  // segment is within R + cell/4 of a step.
-  const int steps = std::max(1, int(std::ceil(std::sqrt(len2) / (cell_ / 2))));
-  const double margin = R + cell_ / 4;
-  std::vector<std::size_t> cells;
-  for (int s = 0; s <= steps; ++s) {
-    const V3 x = A + d * (double(s) / steps);
-    int c0[3], c1[3];
-    for (int k = 0; k < 3; ++k) {
-      c0[k] = std::max(0, int(std::floor((x[k] - margin - lo_[k]) / cell_ - 0.5)));
-      c1[k] = std::min(n_[k] - 1, int(std::ceil((x[k] + margin - lo_[k]) / cell_ - 0.5)));
+  // A first vertex within `reach` (at most a cell) of a point of the segment lies in the cell of that point
+  // or a neighbouring one: the cells the segment passes through (a walk from cell to cell, Amanatides and
+  // Woo) and their neighbours hold every such face.
+  const int spread = std::max(1, int(std::ceil(reach / cell_)));
+  V3 A = v3(a), B = v3(b);
+  // Clip the segment to the cells' box grown by the spread: beyond it no point is near a first vertex.
+  double t0 = 0, t1 = 1;
+  const V3 d = B - A;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = lo_[k] - spread * cell_, hi = lo_[k] + (n_[k] + spread) * cell_;
+    if (d[k] == 0) {
+      if (A[k] < lo || A[k] > hi) return;
+      continue;
     }
-    for (int k = c0[2]; k <= c1[2]; ++k)
-      for (int j = c0[1]; j <= c1[1]; ++j)
-        for (int i = c0[0]; i <= c1[0]; ++i) {
-          const V3 centre(lo_[0] + (i + 0.5) * cell_, lo_[1] + (j + 0.5) * cell_, lo_[2] + (k + 0.5) * cell_);
-          if (distance_to_segment(centre) <= R) cells.push_back(std::size_t(i + n_[0] * (j + n_[1] * k)));
-        }
+    double ta = (lo - A[k]) / d[k], tb = (hi - A[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta), t1 = std::min(t1, tb);
   }
+  if (t0 > t1) return;
+  const V3 P = A + t0 * d, Q = A + t1 * d;
+  std::array<long, 3> c, last, step;
+  std::array<double, 3> t_max, t_delta;
+  const V3 e = Q - P;
+  for (int k = 0; k < 3; ++k) {
+    c[k] = long(std::floor((P[k] - lo_[k]) / cell_));
+    last[k] = long(std::floor((Q[k] - lo_[k]) / cell_));
+    step[k] = e[k] > 0 ? 1 : (e[k] < 0 ? -1 : 0);
+    if (step[k] == 0) {
+      t_max[k] = t_delta[k] = std::numeric_limits<double>::infinity();
+    } else {
+      const double boundary = lo_[k] + (c[k] + (step[k] > 0 ? 1 : 0)) * cell_;
+      t_max[k] = (boundary - P[k]) / e[k];
+      t_delta[k] = cell_ / std::abs(e[k]);
+    }
+  }
+  std::vector<std::size_t> cells;
+  auto add_around = [&](const std::array<long, 3>& x) {
+    long c0[3], c1[3];
+    for (int k = 0; k < 3; ++k) {
+      c0[k] = std::max(0L, x[k] - spread), c1[k] = std::min(long(n_[k]) - 1, x[k] + spread);
+      if (c0[k] > c1[k]) return;
+    }
+    for (long z = c0[2]; z <= c1[2]; ++z)
+      for (long y = c0[1]; y <= c1[1]; ++y)
+        for (long i = c0[0]; i <= c1[0]; ++i) cells.push_back(std::size_t(i + n_[0] * (y + long(n_[1]) * z)));
+  };
+  // At most one step per cell boundary crossed on each axis (plus one for rounding).
+  const long max_steps = std::abs(last[0] - c[0]) + std::abs(last[1] - c[1]) + std::abs(last[2] - c[2]) + 4;
+  for (long s = 0; s <= max_steps; ++s) {
+    add_around(c);
+    if (c == last) break;
+    int k = t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
+    if (t_max[k] > 1) break;  // rounding: the last cell is within a step of here
+    c[k] += step[k];
+    t_max[k] += t_delta[k];
+  }
+  add_around(last);
   std::sort(cells.begin(), cells.end());
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  for (std::size_t c : cells)
-    for (int t = start_[c]; t < start_[c + 1]; ++t) out.push_back(items_[std::size_t(t)]);
+  for (std::size_t cell : cells)
+    for (int t = start_[cell]; t < start_[cell + 1]; ++t) out.push_back(items_[std::size_t(t)]);
 }
 
 namespace {
@@ -355,13 +388,14 @@ class RaySection {
   }
   // section_of's segment of face f, if near_plane lists f and section_of keeps it.
   bool cut_of(int f, Cut& c) const {
-    if (!cells_.listed(S_, q_, f, c.key)) return false;
+    // The plane's cut first: it turns down most faces near the ray, and costs least.
     const auto& F = S_.faces[std::size_t(f)];
-    if ((v3(S_.vertices[std::size_t(F[0])]) - p_).norm() > max_radius_) return false;
     int m = 0;
     for (int e = 0; e < 3; ++e)
       if ((sd(F[e]) > 0) != (sd(F[(e + 1) % 3]) > 0) && m < 2) c.edge[m++] = e;
-    return m == 2;
+    if (m != 2) return false;
+    if ((v3(S_.vertices[std::size_t(F[0])]) - p_).norm() > max_radius_) return false;
+    return cells_.listed(S_, q_, f, c.key);
   }
   V3 point_on(int f, int e) const {
     const auto& F = S_.faces[std::size_t(f)];

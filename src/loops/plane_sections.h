@@ -40,8 +40,8 @@ class FaceCells {
   // Faces whose first vertex is within r of p, in increasing order.
   std::vector<int> near(const SurfaceMesh& surface, const std::array<double, 3>& p, double r) const;
 
-  // Every face whose first vertex lies in a cell within `reach` of the segment a-b (cell centres within
-  // reach + half a cell diagonal), unordered, each once.
+  // Every face whose first vertex is within `reach` of the segment a-b, and others near it: those in the cells
+  // the segment passes through and in the cells within ceil(reach / cell) of them. Unordered, each once.
   void near_segment(const std::array<double, 3>& a, const std::array<double, 3>& b, double reach, std::vector<int>& out) const;
 
   double cell() const { return cell_; }
