@@ -19,6 +19,19 @@ namespace {
 using V3 = Eigen::Vector3d;
 V3 v3(const std::array<double, 3>& a) { return V3(a[0], a[1], a[2]); }
 std::array<double, 3> arr(const V3& v) { return {v[0], v[1], v[2]}; }
+
+// Whether the closed curve winds around p in the plane of e1 and e2, and the area it encloses there.
+bool winds_around(const std::vector<V3>& curve, const V3& p, const V3& e1, const V3& e2, double& area) {
+  double wind = 0, twice_area = 0;
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    const V3 a = curve[i] - p, b = curve[(i + 1) % curve.size()] - p;
+    const double ax = a.dot(e1), ay = a.dot(e2), bx = b.dot(e1), by = b.dot(e2);
+    wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+    twice_area += ax * by - ay * bx;
+  }
+  area = std::abs(twice_area) / 2;
+  return std::abs(wind) >= M_PI;
+}
 }  // namespace
 
 Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, const std::array<double, 3>& pa,
@@ -82,20 +95,14 @@ Polyline3 section_of(const SurfaceMesh& surface, const std::vector<int>& faces, 
       s = std::size_t(t);
     }
     if (!closed || cyc.size() < 3) continue;
-    // winding number of the curve around p and its area, in the plane
-    double wind = 0, area = 0;
-    for (std::size_t i = 0; i < cyc.size(); ++i) {
-      const V3 a = pts[std::size_t(cyc[i])] - p, b = pts[std::size_t(cyc[(i + 1) % cyc.size()])] - p;
-      const double ax = a.dot(e1), ay = a.dot(e2), bx = b.dot(e1), by = b.dot(e2);
-      wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-      area += ax * by - ay * bx;
-    }
-    if (std::abs(wind) < M_PI) continue;
-    area = std::abs(area) / 2;
+    std::vector<V3> curve;
+    for (int i : cyc) curve.push_back(pts[std::size_t(i)]);
+    double area;
+    if (!winds_around(curve, p, e1, e2, area)) continue;
     if (area < best_area) {
       best_area = area;
       best.clear();
-      for (int i : cyc) best.push_back(arr(pts[std::size_t(i)]));
+      for (const V3& x : curve) best.push_back(arr(x));
     }
   }
   return best;
@@ -358,15 +365,8 @@ class RaySection {
       std::vector<V3> pts;
       if (!points_from(c.face, pts)) return false;
       if (pts.size() < 3) continue;
-      double wind = 0, area = 0;
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        const V3 a = pts[i] - p_, b = pts[(i + 1) % pts.size()] - p_;
-        const double ax = a.dot(e1_), ay = a.dot(e2_), bx = b.dot(e1_), by = b.dot(e2_);
-        wind += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
-        area += ax * by - ay * bx;
-      }
-      if (std::abs(wind) < M_PI) continue;
-      area = std::abs(area) / 2;
+      double area;
+      if (!winds_around(pts, p_, e1_, e2_, area)) continue;
       if (area < best_area) {
         best_area = area;
         out.clear();
