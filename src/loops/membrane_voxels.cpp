@@ -37,19 +37,25 @@ void for_box_neighbours(const detail::FloodBox& box, const std::array<int, 3>& p
 // Pieces of the region that hung on the shore only (a spur of a noisy surface, a pocket behind a fill)
 // would become components or cavities of their own once it changes side: they change side with it. A piece
 // is such when it lies inside the box without reaching its sides and holds neither seed piece.
+// A piece's search stops as soon as the piece is known to stay (it holds a vertex of level 0, reaches the
+// box's side, or meets a piece already known to stay, which is then the same piece): the two zones' bodies
+// are most of a big box, and walking them whole for every membrane cost more than its flood. Pieces that
+// go are walked whole, as before, and in the same order.
 void add_debris(const detail::FloodBox& box, const ScalarGrid& grid, std::vector<std::uint32_t>& shore) {
-  static thread_local std::vector<std::uint8_t> mark;  // 1 shore, 2 visited
+  constexpr std::uint8_t kShore = 1, kSeen = 2, kStays = 3;
+  static thread_local std::vector<std::uint8_t> mark;
   mark.assign(box.size(), 0);
-  for (std::uint32_t li : shore) mark[li] = 1;
+  for (std::uint32_t li : shore) mark[li] = kShore;
   const std::size_t original = shore.size();
+  std::vector<std::uint32_t> piece;
   for (std::size_t q = 0; q < original; ++q) {
     for_box_neighbours(box, box.local(shore[q]), [&](std::uint32_t start) {
       const std::uint32_t z = box.zone(start);
       if (mark[start] || (z != 1 && z != 2)) return;
-      std::vector<std::uint32_t> piece{start};
-      mark[start] = 2;
+      piece.assign(1, start);
+      mark[start] = kSeen;
       bool keep = false;  // reaches the box's side inside the grid, or holds a seed (level 0 of the flood)
-      for (std::size_t i = 0; i < piece.size(); ++i) {
+      for (std::size_t i = 0; i < piece.size() && !keep; ++i) {
         const std::uint32_t li = piece[i];
         if (box.level(li) == 0) keep = true;
         const auto p = box.local(li);
@@ -58,13 +64,18 @@ void add_debris(const detail::FloodBox& box, const ScalarGrid& grid, std::vector
           if ((p[a] == 0 || p[a] == box.n[a] - 1) && g != 0 && g != grid.dims[a] - 1) keep = true;
         }
         for_box_neighbours(box, p, [&](std::uint32_t ul) {
+          if (mark[ul] == kStays) keep = true;
           const std::uint32_t zu = box.zone(ul);
           if (mark[ul] || (zu != 1 && zu != 2)) return;
-          mark[ul] = 2;
+          mark[ul] = kSeen;
           piece.push_back(ul);
         });
       }
-      if (!keep) shore.insert(shore.end(), piece.begin(), piece.end());
+      if (keep) {
+        for (std::uint32_t li : piece) mark[li] = kStays;
+      } else {
+        shore.insert(shore.end(), piece.begin(), piece.end());
+      }
     });
   }
 }
@@ -260,7 +271,8 @@ MembraneVoxels nearby_pinch(const ScalarGrid& grid, const FreudenthalComplex& cx
 
 }  // namespace
 
-MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape) {
+MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape,
+                               const std::array<RegionBounds, 2>* bounds) {
   MembraneVoxels out;
   FreudenthalComplex cx(grid.dims);
   if (shape == MembraneShape::Saddle) {
@@ -285,7 +297,8 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
   out.note = "the membrane did not close near the choke";
   for (int attempt = 0; attempt < 16; ++attempt) {
     detail::FloodBox box;
-    const auto outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box);
+    const auto outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box,
+                                                 bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
     bool grow = outcome == detail::FloodOutcome::Grow;
     if (outcome == detail::FloodOutcome::Shrink) {
       if (seed_r <= 1) break;
@@ -346,7 +359,7 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
 }
 
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
-                                       MembraneShape first, bool saddle_alone) {
+                                       MembraneShape first, bool saddle_alone, const std::array<RegionBounds, 2>* bounds) {
   const bool sub_voxel = saddle_alone && choke.depth < 0.5 * grid.voxel_size;
   const MembraneShape other = first == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
   std::vector<MembraneShape> order{first, other};
@@ -354,7 +367,7 @@ MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& chok
   MembraneVoxels m;
   for (MembraneShape s : order) {
     try {
-      m = membrane_voxels(grid, choke, options, s);
+      m = membrane_voxels(grid, choke, options, s, bounds);
     } catch (const Error& e) {
       m = MembraneVoxels{};
       m.note = e.what();

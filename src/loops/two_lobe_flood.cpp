@@ -212,6 +212,26 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
 
 }  // namespace
 
+FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
+                             bool by_distance, FloodBox& box, const RegionBounds* bounds) {
+  // The levels from the saddle's value to the surface's (flood_with), and 0 and one past the last.
+  const double levels =
+      std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / FloodBox::kLevelsPerVoxel) + 3;
+  // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
+  static thread_local std::vector<std::uint16_t> cell16;
+  static thread_local std::vector<std::uint32_t> cell32;
+  if (levels < double(std::size_t(1) << (16 - FloodBox::kLevelShift))) {
+    box.cell16 = &cell16, box.cell = nullptr;
+    return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell16, bounds);
+  }
+  box.cell = &cell32, box.cell16 = nullptr;
+  return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell32, bounds);
+}
+
+}  // namespace chokeloops::detail
+
+namespace chokeloops {
+
 std::array<RegionBounds, 2> region_bounds(const ScalarGrid& grid) {
   const auto& d = grid.dims;
   std::array<RegionBounds, 2> out;
@@ -232,20 +252,4 @@ std::array<RegionBounds, 2> region_bounds(const ScalarGrid& grid) {
   return out;
 }
 
-FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
-                             bool by_distance, FloodBox& box, const RegionBounds* bounds) {
-  // The levels from the saddle's value to the surface's (flood_with), and 0 and one past the last.
-  const double levels =
-      std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / FloodBox::kLevelsPerVoxel) + 3;
-  // Reused by the thread's next flood: a big box is tens of megabytes, and fresh pages cost a fault each.
-  static thread_local std::vector<std::uint16_t> cell16;
-  static thread_local std::vector<std::uint32_t> cell32;
-  if (levels < double(std::size_t(1) << (16 - FloodBox::kLevelShift))) {
-    box.cell16 = &cell16, box.cell = nullptr;
-    return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell16, bounds);
-  }
-  box.cell = &cell32, box.cell16 = nullptr;
-  return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell32, bounds);
-}
-
-}  // namespace chokeloops::detail
+}  // namespace chokeloops

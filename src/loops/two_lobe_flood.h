@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/topology/chokes.h"
 #include "chokeloops/topology/complex.h"
 
@@ -49,14 +50,9 @@ struct FloodBox {
   std::size_t size() const { return lz * std::size_t(n[2]); }
 };
 
-// The grid box (inclusive) holding every vertex of a side's region and its neighbours: the flood never
-// leaves it, so a box clipped to it floods the same vertices in the same order, at the cost of the region
-// rather than of the grid's padding around the shape.
-struct RegionBounds {
-  std::array<int, 3> lo{0, 0, 0}, hi{-1, -1, -1};  // empty: no vertex in the region
-};
-// Of the solid (side Handle: f <= 0) and of the outside (Tunnel: f > 0), in one pass over the grid.
-std::array<RegionBounds, 2> region_bounds(const ScalarGrid& grid);
+// RegionBounds and region_bounds are public (loops/membrane_voxels.h): the label volumes clip their floods too.
+using chokeloops::RegionBounds;
+using chokeloops::region_bounds;
 
 // Floods the box of half-size `r` around the choke's saddle, clipped to `bounds` when given (the choke's side's
 // region_bounds); the seed pieces are looked for within `seed_radius` of it. by_distance: grow the zones by

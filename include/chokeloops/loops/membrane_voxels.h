@@ -2,6 +2,7 @@
 // The grid vertices of a choke's membrane: one shore of the two-lobe flood's contact sheet (membranes.h),
 // the disc across a handle (in the solid) or across a tunnel (in the outside). Flipping their sign cuts the
 // handle or fills the tunnel; `chokeloops filter` does that, and label volumes draw the membrane with them.
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -33,16 +34,29 @@ struct MembraneVoxels {
 // that hung on them only.
 enum class MembraneShape { Sheet, Plane, Saddle, LevelPiece, NearbyPinch };
 
+// The grid box (inclusive) holding every vertex of one side's region and its neighbours. A membrane's flood
+// never leaves it, so a flood box clipped to it floods the same vertices in the same order: the same
+// membrane, at the cost of the region rather than of the grid's padding around the shape.
+struct RegionBounds {
+  std::array<int, 3> lo{0, 0, 0}, hi{-1, -1, -1};  // empty: no vertex in the region
+};
+// Of the solid ([0], f <= 0: handles) and of the outside ([1], f > 0: tunnels), in one pass over the grid.
+std::array<RegionBounds, 2> region_bounds(const ScalarGrid& grid);
+
 // The membrane of the choke, grown in boxes (LoopOptions::box_factor, box_margin) until it closes inside one.
+// `bounds`: region_bounds(grid), when the caller made them for many membranes of one grid (it must not
+// have changed since); the result is the same with them or without.
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
-                               MembraneShape shape = MembraneShape::Sheet);
+                               MembraneShape shape = MembraneShape::Sheet,
+                               const std::array<RegionBounds, 2>* bounds = nullptr);
 
 // The first membrane that closes: `first` (Sheet or Plane), then the other of the two. A choke thinner than
 // half a voxel tries its saddle alone before both (a flood around noise would grow to the whole grid) and
 // only then (unless `saddle_alone` is false). A membrane that throws counts as not closing; the last note
-// says why none did.
+// says why none did. `bounds` as for membrane_voxels.
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
-                                       MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true);
+                                       MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true,
+                                       const std::array<RegionBounds, 2>* bounds = nullptr);
 
 // Where no membrane removes the pair alone (it joins components, opens a cavity, or does not close): the
 // generator's side near the saddle thinned by simple points (a flip that changes neither side's topology),
