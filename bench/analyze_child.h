@@ -27,6 +27,9 @@ struct ChildRun {
   int dims[3] = {0, 0, 0};
   int g = 0, k = 0, loops = 0, loops_found = 0;
   double loop_median_ms = 0;  // median over the loops of each one's own wall time (Loop::trace_ms)
+  // The same over the handle loops and over the tunnel loops (where a model's median sits), and the 90th
+  // percentile over all loops (its long tail)
+  double handle_median_ms = 0, tunnel_median_ms = 0, loop_p90_ms = 0;
   double peak_mb = 0;
   std::string error;
 };
@@ -34,6 +37,11 @@ struct ChildRun {
 inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[v.size() / 2];
+}
+
+inline double percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[std::min(v.size() - 1, std::size_t(p * double(v.size())))];
 }
 
 // Runs analyze(file, options) in a forked child (with `threads` TBB threads when > 0) and reads its
@@ -51,13 +59,16 @@ inline ChildRun analyze_in_child(const std::string& file, const AnalyzeOptions& 
       if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
       AnalyzeResult r = analyze(file, options);
       int k = 0, found = 0;
-      std::vector<double> per_loop;
-      for (auto& l : r.loops) k += l.choke.kind == Kind::Choke, found += l.found, per_loop.push_back(l.trace_ms);
+      std::vector<double> per_loop, per_side[2];
+      for (auto& l : r.loops) {
+        k += l.choke.kind == Kind::Choke, found += l.found, per_loop.push_back(l.trace_ms);
+        per_side[l.choke.side == Side::Handle ? 0 : 1].push_back(l.trace_ms);
+      }
       struct rusage ru;
       getrusage(RUSAGE_SELF, &ru);
-      std::fprintf(out, "ok %lld %d %d %d %d %d %d %d %.1f %.3f\n", (long long)r.surface_stats.vertices, r.grid.dims[0],
-                   r.grid.dims[1], r.grid.dims[2], r.chokes.handle_generators, k, int(r.loops.size()), found,
-                   ru.ru_maxrss / 1024.0, median(per_loop));
+      std::fprintf(out, "ok %lld %d %d %d %d %d %d %d %.1f %.3f %.3f %.3f %.3f\n", (long long)r.surface_stats.vertices,
+                   r.grid.dims[0], r.grid.dims[1], r.grid.dims[2], r.chokes.handle_generators, k, int(r.loops.size()), found,
+                   ru.ru_maxrss / 1024.0, median(per_loop), median(per_side[0]), median(per_side[1]), percentile(per_loop, 0.9));
       for (auto& kv : r.timings_ms) std::fprintf(out, "%s\t%.3f\n", kv.first.c_str(), kv.second);
     } catch (const std::exception& e) {
       std::fprintf(out, "error %s\n", e.what());
@@ -70,8 +81,9 @@ inline ChildRun analyze_in_child(const std::string& file, const AnalyzeOptions& 
   char line[4096];
   if (std::fgets(line, sizeof line, in)) {
     if (std::strncmp(line, "ok ", 3) == 0) {
-      std::sscanf(line + 3, "%lld %d %d %d %d %d %d %d %lf %lf", &res.surface_vertices, &res.dims[0], &res.dims[1],
-                  &res.dims[2], &res.g, &res.k, &res.loops, &res.loops_found, &res.peak_mb, &res.loop_median_ms);
+      std::sscanf(line + 3, "%lld %d %d %d %d %d %d %d %lf %lf %lf %lf %lf", &res.surface_vertices, &res.dims[0], &res.dims[1],
+                  &res.dims[2], &res.g, &res.k, &res.loops, &res.loops_found, &res.peak_mb, &res.loop_median_ms,
+                  &res.handle_median_ms, &res.tunnel_median_ms, &res.loop_p90_ms);
       while (std::fgets(line, sizeof line, in)) {
         char* tab = std::strchr(line, '\t');
         if (!tab) continue;

@@ -51,7 +51,7 @@ void run_model(const Model& m, int runs, int threads) {
   if (!m.d_max.empty()) o.chokes.d_max = Threshold::parse(m.d_max);
   if (!m.min_persistence.empty()) o.chokes.min_persistence = Threshold::parse(m.min_persistence);
   std::map<std::string, std::vector<double>> t;
-  std::vector<double> ratio, per_loop, loop_median;
+  std::vector<double> ratio, per_loop, loop_median, handle_median, tunnel_median, p90;
   bench::ChildRun last;
   double peak = 0;
   for (int r = 0; r < runs; ++r) {
@@ -64,12 +64,16 @@ void run_model(const Model& m, int runs, int threads) {
     ratio.push_back(last.timings_ms["loops"] / last.timings_ms["levelset"]);
     per_loop.push_back(last.loops ? last.timings_ms["loops"] / last.loops : 0);
     loop_median.push_back(last.loop_median_ms);
+    handle_median.push_back(last.handle_median_ms);
+    tunnel_median.push_back(last.tunnel_median_ms);
+    p90.push_back(last.loop_p90_ms);
     peak = std::max(peak, last.peak_mb);
   }
-  std::printf("| %-13s | %4d | %9lld | %3d | %3d | %4d/%-4d | %8.0f | %8.0f | %7.0f | %5.2f | %7.2f | %7.2f | %6.0f |\n",
+  std::printf("| %-13s | %4d | %9lld | %3d | %3d | %4d/%-4d | %8.0f | %8.0f | %7.0f | %5.2f | %7.2f | %7.2f | %7.2f | %7.2f | %7.1f | %6.0f |\n",
               m.name.c_str(), m.resolution, last.surface_vertices, last.g, last.k, last.loops_found, last.loops,
               bench::median(t["levelset"]), bench::median(t["loops"]), bench::median(t["check"]),
-              bench::median(ratio), bench::median(per_loop), bench::median(loop_median), peak);
+              bench::median(ratio), bench::median(per_loop), bench::median(loop_median), bench::median(handle_median),
+              bench::median(tunnel_median), bench::median(p90), peak);
   std::fflush(stdout);
 }
 
@@ -100,10 +104,11 @@ int main(int argc, char** argv) {
   };
   std::printf("median of %d runs, %s threads; times in ms; ratio = loop stage / level-set stage of the same run;\n"
               "ms/loop = loop stage / loops traced; loop med = median over the loops of each one's own wall time (loops\n"
-              "run in parallel); check = the contractibility check of the generators after the loop stage\n\n",
+              "run in parallel), also over the handle loops (H med) and the tunnel loops (T med), and its 90th percentile\n"
+              "(p90); check = the contractibility check of the generators after the loop stage\n\n",
               runs, threads > 0 ? std::to_string(threads).c_str() : "all");
-  std::printf("| model         | res  | surf #v   | g   | k   | loops     | levelset | loops    | check   | ratio | ms/loop | loop med | RSS MB |\n");
-  std::printf("|---------------|------|-----------|-----|-----|-----------|----------|----------|---------|-------|---------|----------|--------|\n");
+  std::printf("| model         | res  | surf #v   | g   | k   | loops     | levelset | loops    | check   | ratio | ms/loop | loop med | H med   | T med   | p90     | RSS MB |\n");
+  std::printf("|---------------|------|-----------|-----|-----|-----------|----------|----------|---------|-------|---------|----------|---------|---------|---------|--------|\n");
   std::fflush(stdout);
   for (const Model& m : models) {
     if (!only.empty() && m.name != only) continue;
