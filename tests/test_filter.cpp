@@ -255,3 +255,53 @@ TEST(Filter, ImpossibleRequestsAreRefused) {
   EXPECT_EQ(r.after.genus, 1);
   EXPECT_EQ(g.values, before.values);
 }
+
+// The label volumes clip each membrane's flood to its side's region (region_bounds): the same membranes,
+// shore for shore, as the flood over the whole box, on clean shapes and on a noisy one whose membranes take
+// specks along (add_debris).
+TEST(MembraneVoxels, ClippedToTheRegionTheyAreTheSame) {
+  std::vector<ScalarGrid> grids{sample_field({96, 96, 96}, torus_with_bar()), sample_field({96, 96, 96}, drilled_ball(0.05)),
+                                sample_field({80, 80, 80}, analytic::tangle_cube())};
+  add_uniform_noise(grids[2], 0.25 * grids[2].voxel_size, 7);
+  int compared = 0, with_more_than_a_voxel = 0;
+  for (const ScalarGrid& g : grids) {
+    const auto bounds = region_bounds(g);
+    ChokeParameters p;
+    const ChokeSet set = find_chokes(g, lower_star_persistence(g), p);
+    ASSERT_FALSE(set.chokes.empty());
+    for (const Choke& c : set.chokes)
+      for (MembraneShape shape : {MembraneShape::Sheet, MembraneShape::Plane}) {
+        const MembraneVoxels whole = membrane_voxels(g, c, {}, shape);
+        const MembraneVoxels clipped = membrane_voxels(g, c, {}, shape, &bounds);
+        EXPECT_EQ(whole.found, clipped.found);
+        EXPECT_EQ(whole.shore, clipped.shore);
+        EXPECT_EQ(whole.box_radius, clipped.box_radius);
+        EXPECT_EQ(whole.note, clipped.note);
+        ++compared;
+        with_more_than_a_voxel += whole.found && whole.shore.size() > 1;
+      }
+  }
+  EXPECT_GE(compared, 20);
+  EXPECT_GE(with_more_than_a_voxel, 4);
+}
+
+// Each side's bounds hold every vertex of its region and its neighbours, and nothing more.
+TEST(MembraneVoxels, RegionBoundsAreTheRegionsBoxAndOneVoxel) {
+  const ScalarGrid g = sample_field({64, 64, 64}, drilled_ball(0.05));
+  const auto b = region_bounds(g);
+  for (int side = 0; side < 2; ++side) {
+    std::array<int, 3> lo{g.dims[0], g.dims[1], g.dims[2]}, hi{-1, -1, -1};
+    for (int k = 0; k < g.dims[2]; ++k)
+      for (int j = 0; j < g.dims[1]; ++j)
+        for (int i = 0; i < g.dims[0]; ++i)
+          if ((g.values[std::size_t(g.index(i, j, k))] <= 0) == (side == 0)) {
+            const std::array<int, 3> q{i, j, k};
+            for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], q[a]), hi[a] = std::max(hi[a], q[a]);
+          }
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(b[side].lo[a], std::max(0, lo[a] - 1)) << side << " " << a;
+      EXPECT_EQ(b[side].hi[a], std::min(g.dims[a] - 1, hi[a] + 1)) << side << " " << a;
+    }
+  }
+  EXPECT_GT(b[0].lo[0], 0);  // the ball's box lies inside the grid: the clip is not the grid
+}
