@@ -502,3 +502,47 @@ TEST(VolumeBadInput, FuzzNegativeDataOffsetIsRefusedBeforeAllocating) {
   }
   std::filesystem::remove(path);
 }
+
+// Generators thinner than a voxel on a flat core (pinholes and hair-thin bridges of the raw map): their
+// interface curves are contractible in every box, and the floods that went on to the whole grid closed loops
+// thousands of voxels long around a hole a fraction of a voxel wide. From a box of kThinCoreBox voxels they
+// take the plane sections first. On this 128-voxel crop of the GM map two of them went from 2810 and 3570
+// voxels to section loops of ~3.
+TEST(VolumeMni, GeneratorsThinnerThanAVoxelGetLocalLoops) {
+  const std::string path = std::string(CHOKELOOPS_DATA) + "/volumes/mni_icbm152_gm_tal_nlin_sym_09a_converted.nii.gz";
+  const VolumeImage img = read_volume(path);
+  const int centre[3] = {111, 95, 58}, half = 64, pad = 2;
+  ScalarGrid g;
+  for (int a = 0; a < 3; ++a) g.dims[a] = 2 * half + 2 * pad;
+  g.values.assign(std::size_t(g.vertex_count()), 1.f);
+  for (int k = 0; k < 2 * half; ++k)
+    for (int j = 0; j < 2 * half; ++j)
+      for (int i = 0; i < 2 * half; ++i) {
+        const int q[3] = {centre[0] - half + i, centre[1] - half + j, centre[2] - half + k};
+        bool inside = true;
+        for (int a = 0; a < 3; ++a) inside = inside && q[a] >= 0 && q[a] < img.dims[a];
+        if (inside)
+          g.values[std::size_t(g.index(i + pad, j + pad, k + pad))] =
+              128.f - img.values[std::size_t(q[0]) + std::size_t(img.dims[0]) * (q[1] + std::size_t(img.dims[1]) * std::size_t(q[2]))];
+      }
+  AnalyzeOptions o;
+  o.max_loops = -1;
+  const AnalyzeResult r = analyze_grid(std::move(g), o);
+  EXPECT_EQ(r.surface_stats.genus, r.chokes.handle_generators);
+  int thin = 0, sections = 0, short_sections = 0, over_1000 = 0;
+  for (const Loop& l : r.loops) {
+    if (l.choke.kind != Kind::Generator || l.choke.depth >= r.grid.voxel_size || !l.found) continue;
+    ++thin;
+    const bool section = l.note.find("plane section") != std::string::npos;
+    sections += section;
+    short_sections += section && l.length < 20 * r.grid.voxel_size;
+    over_1000 += l.length > 1000 * r.grid.voxel_size;
+  }
+  std::printf("GM crop: genus %d, %zu loops, %d generators thinner than a voxel with a loop, %d of them plane sections "
+              "(%d shorter than 20 voxels), %d longer than 1000 voxels\n",
+              r.surface_stats.genus, r.loops.size(), thin, sections, short_sections, over_1000);
+  EXPECT_GT(thin, 40);
+  EXPECT_GE(sections, 19);
+  EXPECT_GE(short_sections, 16);
+  EXPECT_EQ(over_1000, 0);
+}

@@ -79,6 +79,12 @@ class LoopTracer {
         bounds_(detail::region_bounds(grid)), debug_(std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr),
         debug_far_curves_(std::getenv("CHOKELOOPS_DEBUG_FAR_CURVES") != nullptr) {}
 
+  static constexpr int kThinCoreBox = 48;
+  static constexpr const char* kSectionNote =
+      "the membrane's interface gave no curve that bounds on its side (a flat core, e.g. a thin wall): the loop is the "
+      "shortest plane section, through the choke or square to its cycle, that is essential, links no cycle of the other "
+      "side and links its own cycle once";
+
   Loop trace(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle) const {
     Loop loop;
     loop.choke = c;
@@ -101,6 +107,7 @@ class LoopTracer {
     // distance from the two seeds instead puts the interface on their bisector, a cut straight across the
     // wall.
     int r = r0, seed_r = seed_r0;
+    bool sections_tried = false;  // they depend on the choke alone, not on the box: once is enough
     for (int attempt = 0; attempt < 16; ++attempt) {
       auto t_box = std::chrono::steady_clock::now();
       Attempt a = try_box(c, r, seed_r, false, raw, raw_path, check);
@@ -113,6 +120,19 @@ class LoopTracer {
       if (a == Attempt::GrowContractible && r >= full) {
         only_contractible = true;
         break;
+      }
+      // A generator thinner than a voxel (a pinhole or a hair-thin bar of a noisy mask) tries the sections
+      // as soon as its box reaches kThinCoreBox voxels, and floods on only if none is its loop: on the
+      // grey-matter map at 128 such generators flooded every box up to the whole grid, twice per box (40 s
+      // of the loop stage's CPU), and the few loops those floods closed ran hundreds of millimetres round
+      // the brain for a pinhole where the sections give one of a few.
+      if (a == Attempt::GrowContractible && c.depth < h && r >= kThinCoreBox && !sections_tried && check.other_side) {
+        sections_tried = true;
+        if (detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_)) {
+          loop.found = true;
+          loop.note = kSectionNote;
+          break;
+        }
       }
       if (a == Attempt::GrowContractible) {
         only_contractible = true;
@@ -132,12 +152,10 @@ class LoopTracer {
         seed_r = seed_r * 2 / 3;
       }
     }
-    if (!loop.found && check.other_side &&
+    if (!loop.found && check.other_side && !sections_tried &&
         detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_)) {
       loop.found = true;
-      loop.note = "the membrane's interface gave no curve that bounds on its side (a flat core, e.g. a thin wall): the loop is the "
-                  "shortest plane section, through the choke or square to its cycle, that is essential, links no cycle of the other "
-                  "side and links its own cycle once";
+      loop.note = kSectionNote;
     }
     if (!loop.found) {
       loop.note = check.rejected ? "every essential interface curve of the membrane near the choke links a cycle of the other side: "
@@ -154,7 +172,7 @@ class LoopTracer {
       ShortenOptions so;
       so.max_move = c.depth + 3 * h;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
-      if (best.rings == 0) loop.note = "not shortened: no annulus band around the loop";
+      if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
       if (best.rings > 0 && options.slide && best.at_band_edge) slide_to_narrowest(best, so, c.depth + 2 * h);
       if (best.points.size() >= 3) loop.points = best.points;
