@@ -34,15 +34,12 @@ struct ChildRun {
   std::string error;
 };
 
-inline double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
-
 inline double percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[std::min(v.size() - 1, std::size_t(p * double(v.size())))];
 }
+
+inline double median(const std::vector<double>& v) { return percentile(v, 0.5); }
 
 // Runs analyze(file, options) in a forked child (with `threads` TBB threads when > 0) and reads its
 // figures back through a pipe.

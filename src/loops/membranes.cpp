@@ -107,7 +107,16 @@ class LoopTracer {
     // distance from the two seeds instead puts the interface on their bisector, a cut straight across the
     // wall.
     int r = r0, seed_r = seed_r0;
-    bool sections_tried = false;  // they depend on the choke alone, not on the box: once is enough
+    // The plane sections depend on the choke alone, not on the box: tried once at most.
+    bool sections_tried = false;
+    auto try_sections = [&] {
+      sections_tried = true;
+      if (!detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_))
+        return false;
+      loop.found = true;
+      loop.note = kSectionNote;
+      return true;
+    };
     for (int attempt = 0; attempt < 16; ++attempt) {
       auto t_box = std::chrono::steady_clock::now();
       Attempt a = try_box(c, r, seed_r, false, raw, raw_path, check);
@@ -126,14 +135,9 @@ class LoopTracer {
       // grey-matter map at 128 such generators flooded every box up to the whole grid, twice per box (40 s
       // of the loop stage's CPU), and the few loops those floods closed ran hundreds of millimetres round
       // the brain for a pinhole where the sections give one of a few.
-      if (a == Attempt::GrowContractible && c.depth < h && r >= kThinCoreBox && !sections_tried && check.other_side) {
-        sections_tried = true;
-        if (detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_)) {
-          loop.found = true;
-          loop.note = kSectionNote;
-          break;
-        }
-      }
+      if (a == Attempt::GrowContractible && c.depth < h && r >= kThinCoreBox && !sections_tried && check.other_side &&
+          try_sections())
+        break;
       if (a == Attempt::GrowContractible) {
         only_contractible = true;
         a = try_box(c, r, seed_r, true, raw, raw_path, check);
@@ -152,11 +156,7 @@ class LoopTracer {
         seed_r = seed_r * 2 / 3;
       }
     }
-    if (!loop.found && check.other_side && !sections_tried &&
-        detail::generator_section_loop(g_, S_, A_, *T_, sections(), c, *check.other_side, check.own, raw, raw_path, debug_)) {
-      loop.found = true;
-      loop.note = kSectionNote;
-    }
+    if (!loop.found && check.other_side && !sections_tried) try_sections();
     if (!loop.found) {
       loop.note = check.rejected ? "every essential interface curve of the membrane near the choke links a cycle of the other side: "
                                    "none bounds on its own side, so none is reported"
