@@ -171,6 +171,11 @@ class LoopTracer {
     if (options.shorten) {
       ShortenOptions so;
       so.max_move = c.depth + 3 * h;
+      // The interface already crosses the choke's narrowest section, so the searches from vertices along
+      // the band's cut find nothing the descent from the loop itself does not: without them the cage's 127
+      // loops came out 83 identical, none longer by more than 1.3e-7 of its length, 44 shorter by up to
+      // 0.17%, for 2.4 searches a loop instead of 6.4 (a loop that ends at its band's edge still slides).
+      so.cut_samples = 0;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
