@@ -66,12 +66,13 @@ double max_distance_to_vertices_edges(const SurfaceMesh& m, const Polyline3& p) 
 // The vertices within max_k edge rings of the loop, with their ring and nearness (2 on the loop, 1 next to it),
 // as shorten_loop gathers them for the band.
 struct LoopRegion {
-  detail::FlatIntMap rid;
+  detail::DenseIntMap rid;
   std::vector<int> region, ring;
   std::vector<char> near;
 };
 LoopRegion loop_region(const SurfaceMesh& m, const MeshAdjacency& adj, const std::vector<int>& loop, int max_k) {
   LoopRegion r;
+  r.rid = detail::DenseIntMap(m.vertices.size());
   std::vector<int> around;
   for (int v : loop)
     if (r.rid.emplace(v, int(r.region.size()))) r.region.push_back(v), r.ring.push_back(0);
@@ -257,6 +258,45 @@ TEST(Shorten, FlatIntMapAgreesWithUnorderedMap) {
   EXPECT_THROW(flat.at(50000001), std::out_of_range);
   EXPECT_EQ(flat[123456789], 0);  // inserted as 0, as std::unordered_map's operator[]
   EXPECT_EQ(flat.size(), reference.size() + 1);
+}
+
+// The band's dense maps against std::unordered_map, and their pooled arrays: a map made after others went
+// back to the pool (some on a bigger id range) holds none of their keys.
+TEST(Shorten, DenseIntMapAgreesWithUnorderedMapAndStartsEmptyFromThePool) {
+  std::mt19937 rng(11);
+  for (int round = 0; round < 4; ++round) {
+    const int keys = round % 2 ? 300000 : 90000;
+    std::vector<detail::DenseIntMap> alive;  // several at once: several arrays in the pool
+    for (int m = 0; m < 3; ++m) {
+      detail::DenseIntMap dense{std::size_t(keys)};
+      std::unordered_map<int, int> reference;
+      EXPECT_EQ(dense.size(), 0u);
+      for (int i = 0; i < 20000; ++i) {
+        const int key = i % 3 == 0 ? int(rng() % 1000) : int(rng() % std::uint32_t(keys));
+        ASSERT_EQ(dense.contains(key), reference.count(key) == 1) << "round " << round << " key " << key;
+        const int value = int(rng() % 100) - 50;
+        const bool inserted = reference.emplace(key, value).second;
+        EXPECT_EQ(dense.emplace(key, value), inserted);
+        if (i % 5 == 0) dense[key] += 3, reference[key] += 3;
+      }
+      EXPECT_EQ(dense.size(), reference.size());
+      for (auto& [k, v] : reference) {
+        ASSERT_NE(dense.find(k), nullptr);
+        EXPECT_EQ(dense.at(k), v);
+      }
+      EXPECT_EQ(dense.find(-1), nullptr);
+      EXPECT_EQ(dense.find(keys + 5000000), nullptr);
+      EXPECT_THROW(dense.emplace(-1, 0), std::out_of_range);
+      EXPECT_THROW(dense.emplace(keys + 5000000, 0), std::out_of_range);
+      int absent = keys - 1;
+      while (reference.count(absent)) --absent;
+      EXPECT_THROW(dense.at(absent), std::out_of_range);
+      alive.push_back(std::move(dense));
+    }
+  }
+  detail::DenseIntMap empty;
+  EXPECT_FALSE(empty.contains(0));
+  EXPECT_THROW(empty[0], std::out_of_range);
 }
 
 // The band's candidate faces and the Euler characteristics that refuse a ring count unbuilt: for every ring

@@ -60,7 +60,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded; all per-vertex
   // data lives on this region so that the cost follows the band, not the mesh.
   const int max_rings = std::max(1, opt.max_rings);
-  detail::FlatIntMap rid;
+  detail::DenseIntMap rid(mesh.vertices.size());
   std::vector<int> region, ring;
   for (int v : loop)
     if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);

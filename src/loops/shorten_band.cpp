@@ -16,9 +16,11 @@ namespace chokeloops::shorten_detail {
 
 bool Shortener::build_band(const BandCandidates& candidates, int rings, const std::vector<int>& loop) {
   Band B;
+  B.in_face = detail::DenseIntMap(mesh.faces.size());
+  B.local = detail::DenseIntMap(mesh.vertices.size());
   for (std::size_t i = 0; i < candidates.faces.size(); ++i)
     if (candidates.entry[i] <= rings) {
-      B.in_face.emplace(candidates.faces[i], 1);
+      B.in_face.emplace(candidates.faces[i], int(B.faces.size()));
       B.faces.push_back(candidates.faces[i]);
     }
   if (B.faces.empty()) return false;
@@ -62,17 +64,20 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   }
   if (boundary_components != 2) return false;
   // Connected (face flood).
+  // Band faces by their place in b.faces from here on: vectors, not maps.
+  auto place = [&](int f) { const int* i = b.in_face.find(f); return i ? *i : -1; };
   {
     std::vector<int> stack{b.faces[0]};
-    detail::FlatIntMap seen;  // band faces only: the band is small, the mesh may be huge
-    seen.emplace(b.faces[0], 1);
+    std::vector<char> seen(b.faces.size(), 0);
+    seen[0] = 1;
     size_t reached = 1;
     while (!stack.empty()) {
       int f = stack.back();
       stack.pop_back();
       for (int k = 0; k < 3; ++k) {
         int t = adj.twin[3 * f + k];
-        if (t >= 0 && face_in(t / 3) && seen.emplace(t / 3, 1)) ++reached, stack.push_back(t / 3);
+        const int i = t >= 0 ? place(t / 3) : -1;
+        if (i >= 0 && !seen[std::size_t(i)]) seen[std::size_t(i)] = 1, ++reached, stack.push_back(t / 3);
       }
     }
     if (reached != b.faces.size()) return false;
@@ -91,10 +96,12 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     }
     return -1;
   };
-  detail::FlatIntMap parent_h;  // face -> half-edge (in the parent face) crossed to reach it
+  constexpr int kUnreached = -2;
+  std::vector<int> parent_h(b.faces.size(), kUnreached);  // per band face: half-edge (in the parent face) crossed to reach it
+  auto parent_of = [&](int f) -> int& { return parent_h[std::size_t(place(f))]; };
   std::queue<int> q;
   for (int f : b.faces)
-    if (on_curve(f, true) >= 0) parent_h[f] = -1, q.push(f);
+    if (on_curve(f, true) >= 0) parent_of(f) = -1, q.push(f);
   int target = -1;
   while (!q.empty() && target < 0) {
     int f = q.front();
@@ -102,8 +109,9 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     if (on_curve(f, false) >= 0) { target = f; break; }
     for (int k = 0; k < 3; ++k) {
       int h = 3 * f + k, t = adj.twin[h];
-      if (t < 0 || !face_in(t / 3) || parent_h.contains(t / 3)) continue;
-      parent_h[t / 3] = h;
+      const int i = t >= 0 ? place(t / 3) : -1;
+      if (i < 0 || parent_h[std::size_t(i)] != kUnreached) continue;
+      parent_h[std::size_t(i)] = h;
       q.push(t / 3);
     }
   }
@@ -118,9 +126,9 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   set_sign(on_curve(target, false), +1);
   int f = target;
   b.cut_vertices.clear();
-  for (; parent_h[f] >= 0; f = parent_h[f] / 3) {
-    set_sign(parent_h[f], +1);
-    b.cut_vertices.push_back(b.local.at(vert(parent_h[f])));
+  for (; parent_of(f) >= 0; f = parent_of(f) / 3) {
+    set_sign(parent_of(f), +1);
+    b.cut_vertices.push_back(b.local.at(vert(parent_of(f))));
   }
   set_sign(on_curve(f, true), -1);
   int w = 0;
@@ -130,7 +138,7 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
 }
 
 BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
-                               const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                               const detail::DenseIntMap& rid, const std::vector<int>& entry,
                                const std::vector<char>& near, int max_k) {
   const int never = max_k + 1;
   auto face_entry = [&](int f) {
@@ -150,7 +158,7 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
     }
     return k;
   };
-  detail::FlatIntMap face_k;
+  detail::DenseIntMap face_k(mesh.faces.size());
   std::vector<std::pair<int, int>> taken;  // (face, entry ring), sorted by face below
   for (std::size_t i = 0; i < region.size(); ++i)
     if (entry[i] <= max_k)

@@ -7,6 +7,7 @@
 
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
+#include "dense_int_map.h"
 #include "flat_int_map.h"
 
 namespace chokeloops::shorten_detail {
@@ -26,11 +27,11 @@ inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v bet
 
 // Everything about the annulus band around the loop.
 struct Band {
-  detail::FlatIntMap in_face;       // mesh faces of the band (as keys)
+  detail::DenseIntMap in_face;      // mesh face -> its place in `faces`
   std::vector<int> faces;
-  detail::FlatIntMap local;         // mesh vertex -> band vertex
+  detail::DenseIntMap local;        // mesh vertex -> band vertex
   std::vector<int> global;          // band vertex -> mesh vertex
-  detail::FlatIntMap sign;          // cut crossing sign per mesh half-edge
+  detail::FlatIntMap sign;          // cut crossing sign per mesh half-edge (the cut's few edges)
   int winding = 0;                  // of the input loop
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };
@@ -46,7 +47,7 @@ struct BandCandidates {
   std::vector<long> euler;  // per ring count
 };
 BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& region,
-                               const detail::FlatIntMap& rid, const std::vector<int>& entry,
+                               const detail::DenseIntMap& rid, const std::vector<int>& entry,
                                const std::vector<char>& near, int max_k);
 
 struct Shortener {
