@@ -65,16 +65,23 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   for (int v : loop)
     if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
   std::vector<int> around;
+  // Each region vertex's neighbours in the region, for the distances below: every neighbour of an inner
+  // vertex is in the region once that vertex is expanded, and the last ring comes after all others.
+  std::vector<int> next_start{0}, next;
+  const bool distances = opt.max_move > 0;
   for (size_t i = 0; i < region.size(); ++i) {
     int v = region[i];
-    if (ring[i] >= max_rings) continue;
+    if (ring[i] >= max_rings && !distances) continue;
     adj.neighbours(mesh, v, around);
     for (int w : around) {
-      if (rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
+      if (ring[i] < max_rings && rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
+      if (distances)
+        if (const int* wi = rid.find(w)) next.push_back(*wi);
     }
+    if (distances) next_start.push_back(int(next.size()));
   }
   std::vector<double> dist;
-  if (opt.max_move > 0) {
+  if (distances) {
     dist.assign(region.size(), std::numeric_limits<double>::infinity());
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
@@ -82,14 +89,12 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     while (!q.empty()) {
       auto [d, i] = q.top();
       q.pop();
-      if (d > dist[i] || d > opt.max_move) continue;
-      int v = region[i];
-      adj.neighbours(mesh, v, around);
-      for (int w : around) {
-        const int* wi = rid.find(w);
-        if (!wi) continue;
-        double nd = d + dist3(mesh.vertices[v], mesh.vertices[w]);
-        if (nd < dist[std::size_t(*wi)]) dist[std::size_t(*wi)] = nd, q.push({nd, *wi});
+      if (d > dist[std::size_t(i)] || d > opt.max_move) continue;
+      const auto& p = mesh.vertices[std::size_t(region[std::size_t(i)])];
+      for (int j = next_start[std::size_t(i)]; j < next_start[std::size_t(i) + 1]; ++j) {
+        const int wi = next[std::size_t(j)];
+        double nd = d + dist3(p, mesh.vertices[std::size_t(region[std::size_t(wi)])]);
+        if (nd < dist[std::size_t(wi)]) dist[std::size_t(wi)] = nd, q.push({nd, wi});
       }
     }
   }
