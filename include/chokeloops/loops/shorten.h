@@ -28,7 +28,8 @@
 // Measured: wiggly meridian of a torus (R 0.3, r 0.12, 128^3) 1.298 -> 0.7538 (2*pi*r = 0.7540) in ~0.15 s;
 // the same at 256^3 (826K faces) 0.7563 in ~0.1-0.25 s; varying torus: a loop 0.5 rad from the thinnest
 // section slides there (angle 3.127 vs pi, length 0.5650 vs 0.5655). Thread-safe for concurrent calls on one
-// mesh and adjacency (no shared mutable state). Set CHOKELOOPS_DEBUG_SHORTEN=1 for a trace on stderr.
+// mesh and adjacency (the only state they share is a locked pool of scratch arrays, one int per vertex or
+// face, that the calls borrow and give back reset). Set CHOKELOOPS_DEBUG_SHORTEN=1 for a trace on stderr.
 #include <vector>
 
 #include "chokeloops/surface/mesh_adjacency.h"
