@@ -50,4 +50,13 @@ void DenseIntMap::give_back(Store* store) noexcept {
   }
 }
 
+void DenseIntMap::release_pool() noexcept {
+  std::vector<void*> stores;
+  {
+    std::lock_guard<std::mutex> lock(pool().mutex);
+    stores.swap(pool().free);
+  }
+  for (void* store : stores) delete static_cast<Store*>(store);
+}
+
 }  // namespace chokeloops::detail

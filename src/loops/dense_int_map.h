@@ -24,6 +24,8 @@ class DenseIntMap {
   }
   DenseIntMap(const DenseIntMap&) = delete;
   DenseIntMap& operator=(const DenseIntMap&) = delete;
+  // Frees the arrays the pool keeps (those of live maps stay with them): after a batch of calls.
+  static void release_pool() noexcept;
 
   std::size_t size() const { return store_ ? store_->touched.size() : 0; }
   // Inserts key -> value unless the key is there; true when inserted.

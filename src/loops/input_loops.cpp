@@ -243,6 +243,7 @@ std::vector<InputLoop> transfer_loops(const InputMesh& input, const SurfaceMesh&
     carry(m, input.added_face, adj, topology, tree, triangles, grid_loops[i], options, out[i]);
     out[i].transfer_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   });
+  release_shortening_scratch();
   return out;
 }
 

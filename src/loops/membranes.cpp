@@ -536,6 +536,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
    }
   }, tbb::simple_partitioner());
+  release_shortening_scratch();
   if (debug) {
     double sum = 0, mx = 0;
     for (const Loop& l : loops) sum += l.trace_ms, mx = std::max(mx, l.trace_ms);

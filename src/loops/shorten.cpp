@@ -272,6 +272,8 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   return R;
 }
 
+void release_shortening_scratch() noexcept { detail::DenseIntMap::release_pool(); }
+
 ShortenResult shorten_loop(const SurfaceMesh& mesh, const std::vector<int>& loop, const ShortenOptions& options) {
   auto adj = build_adjacency(mesh);
   return shorten_loop(mesh, adj, loop, options);

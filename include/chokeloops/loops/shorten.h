@@ -67,6 +67,10 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
                            const ShortenOptions& options = {});
 ShortenResult shorten_loop(const SurfaceMesh& mesh, const std::vector<int>& loop, const ShortenOptions& options = {});
 
+// Frees the scratch arrays that shorten_loop keeps between calls (an int per surface vertex or face, a
+// few per thread): call it after a batch of loops, so that later stages do not carry them.
+void release_shortening_scratch() noexcept;
+
 // A closed polyline on the surface is first snapped to an edge loop (snap_polyline_to_edge_path), then
 // shortened; max_move is measured from the snapped loop.
 ShortenResult shorten_polyline(const SurfaceMesh& mesh, const MeshAdjacency& adj, const Polyline3& polyline,
