@@ -1,21 +1,19 @@
 // The pool behind DenseIntMap (dense_int_map.h).
 #include "dense_int_map.h"
 
-#include <memory>
 #include <mutex>
 
 namespace chokeloops::detail {
 
-namespace {
-struct Pool {
+struct DenseIntMap::Pool {
   std::mutex mutex;
-  std::vector<void*> free;
+  std::vector<Store*> free;
 };
-Pool& pool() {
+
+DenseIntMap::Pool& DenseIntMap::pool() {
   static Pool p;  // never destroyed before its maps: they live inside calls, not in statics
   return p;
 }
-}  // namespace
 
 DenseIntMap::Store* DenseIntMap::acquire(std::size_t keys) {
   if (keys > std::size_t(std::numeric_limits<int>::max())) throw std::length_error("DenseIntMap: more ids than an int holds");
@@ -23,7 +21,7 @@ DenseIntMap::Store* DenseIntMap::acquire(std::size_t keys) {
   {
     std::lock_guard<std::mutex> lock(pool().mutex);
     if (!pool().free.empty()) {
-      store = static_cast<Store*>(pool().free.back());
+      store = pool().free.back();
       pool().free.pop_back();
     }
   }
@@ -51,12 +49,12 @@ void DenseIntMap::give_back(Store* store) noexcept {
 }
 
 void DenseIntMap::release_pool() noexcept {
-  std::vector<void*> stores;
+  std::vector<Store*> stores;
   {
     std::lock_guard<std::mutex> lock(pool().mutex);
     stores.swap(pool().free);
   }
-  for (void* store : stores) delete static_cast<Store*>(store);
+  for (Store* store : stores) delete store;
 }
 
 }  // namespace chokeloops::detail

@@ -68,6 +68,8 @@ class DenseIntMap {
       throw std::out_of_range("DenseIntMap: key outside the map's id range");
     return store_->value[std::size_t(key)];
   }
+  struct Pool;  // the stores given back, for the next maps
+  static Pool& pool();
   static Store* acquire(std::size_t keys);
   static void give_back(Store* store) noexcept;
 };
