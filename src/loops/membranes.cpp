@@ -106,7 +106,10 @@ class LoopTracer {
     // the membrane need not cut the handle; a bigger box does not change that. Flooding the same box by
     // distance from the two seeds instead puts the interface on their bisector, a cut straight across the
     // wall.
-    int r = r0, seed_r = seed_r0;
+    detail::BoxExtent box = detail::BoxExtent::cube(r0);
+    int seed_r = seed_r0;
+    const detail::RegionBounds& bounds = bounds_[c.side == Side::Handle ? 0 : 1];
+    const auto saddle_at = cx_.coords(c.saddle);
     // The plane sections depend on the choke alone, not on the box: tried once at most.
     bool sections_tried = false;
     auto try_sections = [&] {
@@ -117,16 +120,21 @@ class LoopTracer {
       loop.note = kSectionNote;
       return true;
     };
-    for (int attempt = 0; attempt < 16; ++attempt) {
+    for (int attempt = 0; attempt < 48; ++attempt) {
       auto t_box = std::chrono::steady_clock::now();
-      Attempt a = try_box(c, r, seed_r, false, raw, raw_path, check);
+      std::array<char, 6> open_sides{};
+      Attempt a = try_box(c, box, seed_r, false, raw, raw_path, check, open_sides);
+      const int r = box.largest();
       if (debug_)
-        std::fprintf(stderr, "membranes: %s %s depth %g box %d seed %d: attempt %d, %.0f ms\n", to_string(c.side), to_string(c.kind),
-                     c.depth, r, seed_r, int(a), std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_box).count());
+        std::fprintf(stderr, "membranes: %s %s depth %g box %d (%d %d %d / %d %d %d) seed %d: attempt %d, %.0f ms\n", to_string(c.side),
+                     to_string(c.kind), c.depth, r, box.below[0], box.below[1], box.below[2], box.above[0], box.above[1],
+                     box.above[2], seed_r, int(a),
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_box).count());
+      const bool whole = detail::box_covers(box, saddle_at, bounds);
       // At the whole grid a flat core goes to the plane sections below: the flood by distance there
       // gave no loop in 32 tries on the pierced block (0.2 s each), and on the cup a loop 0.5% longer
       // than the section's.
-      if (a == Attempt::GrowContractible && r >= full) {
+      if (a == Attempt::GrowContractible && whole) {
         only_contractible = true;
         break;
       }
@@ -138,19 +146,24 @@ class LoopTracer {
       if (a == Attempt::GrowContractible && c.depth < h && r >= kThinCoreBox && !sections_tried && check.other_side &&
           try_sections())
         break;
-      if (a == Attempt::GrowContractible) {
+      const bool contractible = a == Attempt::GrowContractible;
+      if (contractible) {
         only_contractible = true;
-        a = try_box(c, r, seed_r, true, raw, raw_path, check);
+        a = try_box(c, box, seed_r, true, raw, raw_path, check, open_sides);
       }
       if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
       if (a == Attempt::Grow || a == Attempt::GrowContractible) {
-        if (r >= full) break;
-        r = std::min(full, int(std::ceil(r * 1.8)));
-        // A box past half the grid costs about what the whole grid does: go there at once rather than
-        // flood one more box that may still miss the far side (a block's handle runs its hole's length).
-        // Sooner (once the box holds half of the region's box) saved ~4 s of the pierced block's flood
-        // CPU, but one of Neptune's tunnels closes at 202 voxels, and its flood went 2.4 -> 4.0 s.
-        if (2 * r >= full) r = full;
+        if (whole) break;
+        // Only the sides where a curve through the choke runs out of the box grow: a membrane across a
+        // block's whole section is a thin sheet, and a cube that holds it floods the block (the pierced
+        // block's handle generators: 99 floods of the whole solid, 0.5 s each).
+        // Only a generator's box grows by sides: its curve must be essential and link no cycle of the other
+        // side, which a curve bent by a box too narrow for its membrane is not. A choke has no such check,
+        // and on the pierced block a box grown by sides gave one choke a loop twice the whole grid's.
+        // Contractible or wrongly linked curves are no matter of where the box cuts the membrane: the box
+        // becomes the cube of its largest side and grows as a whole.
+        if (contractible || c.kind != Kind::Generator) open_sides = {}, box = detail::BoxExtent::cube(r);
+        detail::grow_box(box, open_sides, saddle_at, bounds, full);
       } else {
         if (seed_r <= 1) break;
         seed_r = seed_r * 2 / 3;
@@ -293,12 +306,15 @@ class LoopTracer {
     bool rejected = false;  // an essential curve was turned down because it links one of them
   };
 
-  Attempt try_box(const Choke& c, int r, int seed_radius, bool by_distance, Polyline3& out, std::vector<int>& out_path,
-                  CurveCheck& check) const {
+  // open_sides: set to the box's sides (below x y z, above x y z) where a curve through the choke runs out of
+  // the box, when none closes there.
+  Attempt try_box(const Choke& c, const detail::BoxExtent& extent, int seed_radius, bool by_distance, Polyline3& out,
+                  std::vector<int>& out_path, CurveCheck& check, std::array<char, 6>& open_sides) const {
+    const int r = extent.largest();
     const bool handle = c.side == Side::Handle;
     auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
     detail::FloodBox box;
-    switch (detail::flood_two_lobes(g_, cx_, c, r, seed_radius, by_distance, box, &bounds_[handle ? 0 : 1])) {
+    switch (detail::flood_two_lobes(g_, cx_, c, extent, seed_radius, by_distance, box, &bounds_[handle ? 0 : 1])) {
       case detail::FloodOutcome::Grow: return Attempt::Grow;
       case detail::FloodOutcome::Shrink: return Attempt::Shrink;
       case detail::FloodOutcome::Flooded: break;
@@ -395,7 +411,10 @@ class LoopTracer {
       }
       if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve)});
     }
-    if (candidates.empty()) return Attempt::Grow;
+    if (candidates.empty()) {
+      mark_open_sides(segments, at, box, c, open_sides);
+      return Attempt::Grow;
+    }
     // Nearest first; the curves come from sorted faces, so ties resolve the same way on every run.
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
@@ -440,6 +459,54 @@ class LoopTracer {
       return Attempt::Found;
     }
     return Attempt::GrowContractible;
+  }
+
+  // Marks the sides of the flood box where an interface curve that passes near the choke ends (it ends where
+  // the box cuts the membrane): the box grows there.
+  void mark_open_sides(const std::vector<std::array<std::int64_t, 2>>& segments,
+                       const std::unordered_map<std::int64_t, std::array<int, 2>>& at, const detail::FloodBox& box,
+                       const Choke& c, std::array<char, 6>& open_sides) const {
+    auto midpoint = [&](std::int64_t e) {
+      const auto& a = S_.vertices[int(e >> 32)];
+      const auto& b = S_.vertices[int(e & 0xffffffff)];
+      return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+    };
+    const double near = c.depth + 4 * g_.voxel_size;
+    std::vector<char> seen(segments.size(), 0);
+    std::vector<int> stack;
+    std::vector<std::int64_t> ends;
+    for (int first = 0; first < int(segments.size()); ++first) {
+      if (seen[std::size_t(first)]) continue;
+      seen[std::size_t(first)] = 1;
+      stack.assign(1, first);
+      ends.clear();
+      double d = 1e300;
+      while (!stack.empty()) {
+        const int s = stack.back();
+        stack.pop_back();
+        for (std::int64_t e : segments[std::size_t(s)]) {
+          const auto p = midpoint(e);
+          d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
+          const auto& pair = at.at(e);
+          if (pair[1] < 0) { ends.push_back(e); continue; }
+          const int t = pair[0] == s ? pair[1] : pair[0];
+          if (!seen[std::size_t(t)]) seen[std::size_t(t)] = 1, stack.push_back(t);
+        }
+      }
+      if (d > near) continue;
+      for (std::int64_t e : ends) {
+        const auto p = midpoint(e);
+        int nearest = 0;
+        double best = 1e300;
+        for (int a = 0; a < 3; ++a) {
+          const double u = (p[a] - g_.origin[a]) / g_.h(a);
+          const double below = u - box.lo[a], above = box.hi[a] - u;
+          if (below < best) best = below, nearest = a;
+          if (above < best) best = above, nearest = a + 3;
+        }
+        open_sides[std::size_t(nearest)] = 1;
+      }
+    }
   }
 
   const ScalarGrid& g_;

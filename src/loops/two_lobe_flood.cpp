@@ -11,8 +11,8 @@ namespace {
 // The flood with one cell word of type Word a box vertex: 16 bits when the levels fit (most floods), else 32.
 // The flood is bound by the reads of its cells, so a narrower word is a smaller working set.
 template <class Word>
-FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
-                        bool by_distance, FloodBox& box, std::vector<Word>& cell, const RegionBounds* bounds) {
+FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, const BoxExtent& extent,
+                        int seed_radius, bool by_distance, FloodBox& box, std::vector<Word>& cell, const RegionBounds* bounds) {
   const float* f = grid.values.data();
   const bool handle = c.side == Side::Handle;
   const Id s = c.saddle;
@@ -23,8 +23,8 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   auto& hi = box.hi;
   auto& n = box.n;
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(0, sc[a] - r);
-    hi[a] = std::min(grid.dims[a] - 1, sc[a] + r);
+    lo[a] = std::max(0, sc[a] - extent.below[a]);
+    hi[a] = std::min(grid.dims[a] - 1, sc[a] + extent.above[a]);
     if (bounds) lo[a] = std::max(lo[a], bounds->lo[a]), hi[a] = std::min(hi[a], bounds->hi[a]);
     if (hi[a] < lo[a]) return FloodOutcome::Grow;  // the saddle's region is empty here: no lobe to flood
     n[a] = hi[a] - lo[a] + 1;
@@ -79,7 +79,7 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
 
   // Seeds: the two pieces of {below the saddle} that hold the lobes, found in a seed box of about the
   // choke's depth; around a handle they join farther away, which the flood below must not see.
-  const int seed_r = std::min(r, seed_radius);
+  const int seed_r = std::min(extent.smallest(), seed_radius);
   auto in_seed_box = [&](const std::array<int, 3>& p) {
     for (int a = 0; a < 3; ++a)
       if (std::abs(lo[a] + p[a] - sc[a]) > seed_r) return false;
@@ -214,6 +214,11 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
 
 FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
                              bool by_distance, FloodBox& box, const RegionBounds* bounds) {
+  return flood_two_lobes(grid, cx, c, BoxExtent::cube(r), seed_radius, by_distance, box, bounds);
+}
+
+FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, const BoxExtent& extent,
+                             int seed_radius, bool by_distance, FloodBox& box, const RegionBounds* bounds) {
   // The levels from the saddle's value to the surface's (flood_with), and 0 and one past the last.
   const double levels =
       std::abs(double(grid.values[std::size_t(c.saddle)])) / (grid.voxel_size / FloodBox::kLevelsPerVoxel) + 3;
@@ -222,10 +227,33 @@ FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& c
   static thread_local std::vector<std::uint32_t> cell32;
   if (levels < double(std::size_t(1) << (16 - FloodBox::kLevelShift))) {
     box.cell16 = &cell16, box.cell = nullptr;
-    return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell16, bounds);
+    return flood_with(grid, cx, c, extent, seed_radius, by_distance, box, cell16, bounds);
   }
   box.cell = &cell32, box.cell16 = nullptr;
-  return flood_with(grid, cx, c, r, seed_radius, by_distance, box, cell32, bounds);
+  return flood_with(grid, cx, c, extent, seed_radius, by_distance, box, cell32, bounds);
+}
+
+bool box_covers(const BoxExtent& extent, const std::array<int, 3>& saddle, const RegionBounds& bounds) {
+  for (int a = 0; a < 3; ++a)
+    if (saddle[a] - extent.below[a] > bounds.lo[a] || saddle[a] + extent.above[a] < bounds.hi[a]) return false;
+  return true;
+}
+
+void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const std::array<int, 3>& saddle,
+              const RegionBounds& bounds, int full) {
+  auto radius = [&](int side) -> int& { return side < 3 ? extent.below[side] : extent.above[side - 3]; };
+  auto can_grow = [&](int side) {
+    const int a = side % 3;
+    return side < 3 ? saddle[a] - extent.below[a] > bounds.lo[a] : saddle[a] + extent.above[a] < bounds.hi[a];
+  };
+  bool some = false;
+  for (int side = 0; side < 6; ++side) some |= open_sides[std::size_t(side)] && can_grow(side);
+  for (int side = 0; side < 6; ++side) {
+    if (some && !(open_sides[std::size_t(side)] && can_grow(side))) continue;
+    int& r = radius(side);
+    r = std::min(full, int(std::ceil(r * 1.8)));
+    if (2 * r >= full) r = full;
+  }
 }
 
 }  // namespace chokeloops::detail

@@ -4,6 +4,7 @@
 // through the region (the solid for handles, the outside for tunnels) in filtration order inside a box
 // around the saddle. Their contact is the membrane; where it meets the surface is the loop. The loop
 // tracer reads the contact at the shore, the filter the whole contact sheet.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -54,11 +55,32 @@ struct FloodBox {
 using chokeloops::RegionBounds;
 using chokeloops::region_bounds;
 
+// The half-sizes of a flood box on each side of the saddle, per axis: a box can grow toward the side where
+// its membrane runs out (a sheet across a block's whole section is thin across its own plane).
+struct BoxExtent {
+  std::array<int, 3> below{}, above{};
+  static BoxExtent cube(int r) { return {{r, r, r}, {r, r, r}}; }
+  int largest() const { return std::max({below[0], below[1], below[2], above[0], above[1], above[2]}); }
+  int smallest() const { return std::min({below[0], below[1], below[2], above[0], above[1], above[2]}); }
+};
+
 // Floods the box of half-size `r` around the choke's saddle, clipped to `bounds` when given (the choke's side's
 // region_bounds); the seed pieces are looked for within `seed_radius` of it. by_distance: grow the zones by
 // steps from the seeds (their bisector) instead of in filtration order. Throws Error when the choke is too
 // deep for the level queue.
 FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, int r, int seed_radius,
                              bool by_distance, FloodBox& box, const RegionBounds* bounds = nullptr);
+// The same in a box of the given half-sizes on each side of the saddle.
+FloodOutcome flood_two_lobes(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, const BoxExtent& extent,
+                             int seed_radius, bool by_distance, FloodBox& box, const RegionBounds* bounds = nullptr);
+
+// True when the box around `saddle` (grid coordinates) holds all of `bounds`: its flood is the region's.
+bool box_covers(const BoxExtent& extent, const std::array<int, 3>& saddle, const RegionBounds& bounds);
+
+// Grows the sides of the box marked in `open_sides` (below x y z, above x y z) that can still grow within
+// `bounds`, each by a factor 1.8 up to `full` voxels (a side past half of `full` goes to `full` at once: one
+// more box nearly the grid's size would cost what the grid does); all six sides when none of them is marked.
+void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const std::array<int, 3>& saddle,
+              const RegionBounds& bounds, int full);
 
 }  // namespace chokeloops::detail
