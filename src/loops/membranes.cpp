@@ -13,7 +13,8 @@
 // {v below the saddle} that the choke simplex joins (the pair's lobes), found inside the box, and the flood
 // then absorbs every other piece; the connectivity is the Freudenthal complex's (14 neighbours) everywhere;
 // the seed pieces are found in a small box of about the depth (around a handle they join farther away),
-// and the flood box grows until the interface closes on the surface near the choke.
+// and the flood box grows until the interface closes on the surface near the choke (a generator's box only
+// on the sides where a curve through the choke runs out of it: a membrane across a thick block is a thin sheet).
 //
 // Generators: the zones' interface can have several curves on the surface. A generator's loop must be
 // non-contractible there, so its curves are asked in order of distance from the choke and the nearest one
@@ -360,7 +361,7 @@ class LoopTracer {
     std::sort(sorted_faces.begin(), sorted_faces.end());
     sorted_faces.erase(std::unique(sorted_faces.begin(), sorted_faces.end()), sorted_faces.end());
     auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
-    std::vector<std::array<std::int64_t, 2>> segments;
+    detail::InterfaceSegments segments;
     for (int fi : sorted_faces) {  // every corner labelled, both labels present (the filter above)
       const auto& F = S_.faces[fi];
       const std::array<std::int8_t, 3> l{vertex_label.get(F[0]), vertex_label.get(F[1]), vertex_label.get(F[2])};
@@ -370,7 +371,7 @@ class LoopTracer {
         if (l[q] != l[(q + 1) % 3]) seg[m++] = key(F[q], F[(q + 1) % 3]);
       segments.push_back(seg);
     }
-    std::unordered_map<std::int64_t, std::array<int, 2>> at;
+    detail::SegmentsAtEdge at;
     for (int i = 0; i < int(segments.size()); ++i)
       for (auto e : segments[i]) {
         auto it = at.find(e);
@@ -418,7 +419,7 @@ class LoopTracer {
       if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve)});
     }
     if (candidates.empty()) {
-      mark_open_sides(segments, at, box, c, open_sides);
+      detail::mark_open_sides(g_, S_, segments, at, box, c.point, c.depth + 4 * h, open_sides);
       return Attempt::Grow;
     }
     // Nearest first; the curves come from sorted faces, so ties resolve the same way on every run.
@@ -465,54 +466,6 @@ class LoopTracer {
       return Attempt::Found;
     }
     return Attempt::GrowContractible;
-  }
-
-  // Marks the sides of the flood box where an interface curve that passes near the choke ends (it ends where
-  // the box cuts the membrane): the box grows there.
-  void mark_open_sides(const std::vector<std::array<std::int64_t, 2>>& segments,
-                       const std::unordered_map<std::int64_t, std::array<int, 2>>& at, const detail::FloodBox& box,
-                       const Choke& c, std::array<char, 6>& open_sides) const {
-    auto midpoint = [&](std::int64_t e) {
-      const auto& a = S_.vertices[int(e >> 32)];
-      const auto& b = S_.vertices[int(e & 0xffffffff)];
-      return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
-    };
-    const double near = c.depth + 4 * g_.voxel_size;
-    std::vector<char> seen(segments.size(), 0);
-    std::vector<int> stack;
-    std::vector<std::int64_t> ends;
-    for (int first = 0; first < int(segments.size()); ++first) {
-      if (seen[std::size_t(first)]) continue;
-      seen[std::size_t(first)] = 1;
-      stack.assign(1, first);
-      ends.clear();
-      double d = 1e300;
-      while (!stack.empty()) {
-        const int s = stack.back();
-        stack.pop_back();
-        for (std::int64_t e : segments[std::size_t(s)]) {
-          const auto p = midpoint(e);
-          d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
-          const auto& pair = at.at(e);
-          if (pair[1] < 0) { ends.push_back(e); continue; }
-          const int t = pair[0] == s ? pair[1] : pair[0];
-          if (!seen[std::size_t(t)]) seen[std::size_t(t)] = 1, stack.push_back(t);
-        }
-      }
-      if (d > near) continue;
-      for (std::int64_t e : ends) {
-        const auto p = midpoint(e);
-        int nearest = 0;
-        double best = 1e300;
-        for (int a = 0; a < 3; ++a) {
-          const double u = (p[a] - g_.origin[a]) / g_.h(a);
-          const double below = u - box.lo[a], above = box.hi[a] - u;
-          if (below < best) best = below, nearest = a;
-          if (above < best) best = above, nearest = a + 3;
-        }
-        open_sides[std::size_t(nearest)] = 1;
-      }
-    }
   }
 
   const ScalarGrid& g_;

@@ -256,6 +256,51 @@ void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const st
   }
 }
 
+void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const InterfaceSegments& segments,
+                     const SegmentsAtEdge& at, const FloodBox& box, const std::array<double, 3>& point, double near,
+                     std::array<char, 6>& open_sides) {
+  auto midpoint = [&](std::int64_t e) {
+    const auto& a = surface.vertices[std::size_t(e >> 32)];
+    const auto& b = surface.vertices[std::size_t(e & 0xffffffff)];
+    return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+  };
+  std::vector<char> seen(segments.size(), 0);
+  std::vector<int> stack;
+  std::vector<std::int64_t> ends;
+  for (int first = 0; first < int(segments.size()); ++first) {
+    if (seen[std::size_t(first)]) continue;
+    seen[std::size_t(first)] = 1;
+    stack.assign(1, first);
+    ends.clear();
+    double d = 1e300;
+    while (!stack.empty()) {
+      const int s = stack.back();
+      stack.pop_back();
+      for (std::int64_t e : segments[std::size_t(s)]) {
+        const auto p = midpoint(e);
+        d = std::min(d, std::hypot(p[0] - point[0], p[1] - point[1], p[2] - point[2]));
+        const auto& pair = at.at(e);
+        if (pair[1] < 0) { ends.push_back(e); continue; }
+        const int t = pair[0] == s ? pair[1] : pair[0];
+        if (!seen[std::size_t(t)]) seen[std::size_t(t)] = 1, stack.push_back(t);
+      }
+    }
+    if (d > near) continue;
+    for (std::int64_t e : ends) {
+      const auto p = midpoint(e);
+      int nearest = 0;
+      double best = 1e300;
+      for (int a = 0; a < 3; ++a) {
+        const double u = (p[a] - grid.origin[a]) / grid.h(a);
+        const double below = u - box.lo[a], above = box.hi[a] - u;
+        if (below < best) best = below, nearest = a;
+        if (above < best) best = above, nearest = a + 3;
+      }
+      open_sides[std::size_t(nearest)] = 1;
+    }
+  }
+}
+
 }  // namespace chokeloops::detail
 
 namespace chokeloops {

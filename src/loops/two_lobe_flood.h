@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/topology/chokes.h"
 #include "chokeloops/topology/complex.h"
+#include "chokeloops/surface/surface.h"
 
 namespace chokeloops::detail {
 
@@ -82,5 +84,16 @@ bool box_covers(const BoxExtent& extent, const std::array<int, 3>& saddle, const
 // more box nearly the grid's size would cost what the grid does); all six sides when none of them is marked.
 void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const std::array<int, 3>& saddle,
               const RegionBounds& bounds, int full);
+
+// Interface segments on surface faces, each between two surface edges (keys: the edges' two vertices, the
+// smaller first, in 32 bits each), and the segments at each edge (the second -1 at a curve's open end).
+using InterfaceSegments = std::vector<std::array<std::int64_t, 2>>;
+using SegmentsAtEdge = std::unordered_map<std::int64_t, std::array<int, 2>>;
+
+// Marks the sides of the flood box (below x y z, above x y z) where an interface curve that comes within
+// `near` of `point` ends: such a curve ends where the box cuts its membrane, and the box grows there.
+void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const InterfaceSegments& segments,
+                     const SegmentsAtEdge& at, const FloodBox& box, const std::array<double, 3>& point, double near,
+                     std::array<char, 6>& open_sides);
 
 }  // namespace chokeloops::detail
