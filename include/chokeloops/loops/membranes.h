@@ -34,7 +34,7 @@ struct Loop {
   std::array<double, 3> centroid{0, 0, 0};
   std::array<double, 3> normal{0, 0, 0};  // unit normal of the loop's best-fit plane
   double radius_min = 0, radius_mean = 0;  // distances of the points from the centroid
-  int box_radius = 0;              // half-size in voxels of the box the membrane closed in
+  int box_radius = 0;              // largest half-size in voxels of the box the membrane closed in
   double trace_ms = 0;             // wall time spent on this loop (a diagnostic for benchmarks; not reported)
 };
 
