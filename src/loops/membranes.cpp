@@ -544,13 +544,34 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
                       : chokes[i].depth;
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return extent[a] > extent[b]; });
-  std::atomic<std::size_t> next{0};
   const int workers = std::max(1, std::min(tbb::this_task_arena::max_concurrency(), int(chokes.size())));
+  // The surface's homology basis, which every generator's curve is checked with, is one serial pass over the
+  // surface (85 ms on the cage, 0.6 s on the pierced block): the first worker builds it while the others trace
+  // the chokes, which need no basis, instead of waiting on the first generator that asks for it.
+  const bool build_basis = topology && std::any_of(chokes.begin(), chokes.end(), [](const Choke& c) { return c.kind == Kind::Generator; });
+  std::atomic<bool> basis_ready{!build_basis};
+  std::vector<std::size_t> chokes_only;
+  for (std::size_t i : order)
+    if (chokes[i].kind != Kind::Generator) chokes_only.push_back(i);
+  std::unique_ptr<std::atomic<char>[]> taken(new std::atomic<char>[chokes.size()]());
+  std::atomic<std::size_t> next{0}, next_choke{0};
+  auto take = [&](std::atomic<std::size_t>& cursor, const std::vector<std::size_t>& list) -> std::ptrdiff_t {
+    for (std::size_t k = cursor++; k < list.size(); k = cursor++)
+      if (!taken[list[k]].exchange(1)) return std::ptrdiff_t(list[k]);
+    return -1;
+  };
   // One choke whose loop cannot be made (e.g. a membrane interface spanning two surface components of a
   // raw segmentation) is reported without a loop; it does not stop the others.
-  tbb::parallel_for(0, workers, [&](int) {
-   for (std::size_t k = next++; k < order.size(); k = next++) {
-    const std::size_t i = order[k];
+  tbb::parallel_for(0, workers, [&](int worker) {
+   if (worker == 0 && build_basis) {
+     topology->prepare_homology();
+     basis_ready = true;
+   }
+   for (;;) {
+    std::ptrdiff_t picked = basis_ready ? -1 : take(next_choke, chokes_only);
+    if (picked < 0) picked = take(next, order);
+    if (picked < 0) break;
+    const std::size_t i = std::size_t(picked);
     const auto t0 = std::chrono::steady_clock::now();
     try {
       loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr);
