@@ -161,14 +161,14 @@ class LoopTracer {
       if (check.rejected && !sections_tried && check.other_side && try_sections()) break;
       if (a == Attempt::Grow || a == Attempt::GrowContractible) {
         if (whole) break;
-        // Only the sides where a curve through the choke runs out of the box grow: a membrane across a
-        // block's whole section is a thin sheet, and a cube that holds it floods the block (the pierced
-        // block's handle generators: 99 floods of the whole solid, 0.5 s each).
-        // Only a generator's box grows by sides: its curve must be essential and link no cycle of the other
-        // side, which a curve bent by a box too narrow for its membrane is not. A choke has no such check,
-        // and on the pierced block a box grown by sides gave one choke a loop twice the whole grid's.
-        // Contractible or wrongly linked curves are no matter of where the box cuts the membrane: the box
-        // becomes the cube of its largest side and grows as a whole.
+        // A generator's box grows only on the sides where a curve through the choke runs out of it: a
+        // membrane across a block's whole section is a thin sheet, and a cube that holds it floods the block
+        // (the pierced block's handle generators: 99 floods of the whole solid, 0.5 s each). A generator's
+        // curve must be essential and link no cycle of the other side, which a curve bent by a box too narrow
+        // for its membrane is not; a choke's curve has no such check, and on the pierced block a box grown by
+        // sides gave one choke a loop twice as long as the whole grid's flood gives. So a choke's box, and a
+        // box whose curves were contractible or wrongly linked (no matter of where the box cuts the
+        // membrane), becomes the cube of its largest side and grows as a whole.
         if (contractible || c.kind != Kind::Generator) open_sides = {}, box = detail::BoxExtent::cube(r);
         detail::grow_box(box, open_sides, saddle_at, bounds, full);
       } else {
@@ -380,11 +380,6 @@ class LoopTracer {
       }
     std::vector<char> used(segments.size(), 0);
     const double h = g_.voxel_size;
-    auto midpoint = [&](std::int64_t e) {
-      const auto& a = S_.vertices[int(e >> 32)];
-      const auto& b = S_.vertices[int(e & 0xffffffff)];
-      return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
-    };
     struct Candidate { double distance; Polyline3 curve; };
     std::vector<Candidate> candidates;
     for (int start = 0; start < int(segments.size()); ++start) {
@@ -393,10 +388,10 @@ class LoopTracer {
       std::int64_t first = segments[start][0], e = segments[start][1];
       int seg = start;
       bool closed = false;
-      curve.push_back(midpoint(first));
+      curve.push_back(detail::edge_midpoint(S_, first));
       used[seg] = 1;
       for (;;) {
-        curve.push_back(midpoint(e));
+        curve.push_back(detail::edge_midpoint(S_, e));
         auto& pair = at[e];
         int next = pair[0] == seg ? pair[1] : pair[0];
         if (next < 0 || used[next]) break;

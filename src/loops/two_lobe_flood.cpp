@@ -259,11 +259,6 @@ void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const st
 void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const InterfaceSegments& segments,
                      const SegmentsAtEdge& at, const FloodBox& box, const std::array<double, 3>& point, double near,
                      std::array<char, 6>& open_sides) {
-  auto midpoint = [&](std::int64_t e) {
-    const auto& a = surface.vertices[std::size_t(e >> 32)];
-    const auto& b = surface.vertices[std::size_t(e & 0xffffffff)];
-    return std::array<double, 3>{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
-  };
   std::vector<char> seen(segments.size(), 0);
   std::vector<int> stack;
   std::vector<std::int64_t> ends;
@@ -277,7 +272,7 @@ void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const I
       const int s = stack.back();
       stack.pop_back();
       for (std::int64_t e : segments[std::size_t(s)]) {
-        const auto p = midpoint(e);
+        const auto p = edge_midpoint(surface, e);
         d = std::min(d, std::hypot(p[0] - point[0], p[1] - point[1], p[2] - point[2]));
         const auto& pair = at.at(e);
         if (pair[1] < 0) { ends.push_back(e); continue; }
@@ -287,7 +282,7 @@ void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const I
     }
     if (d > near) continue;
     for (std::int64_t e : ends) {
-      const auto p = midpoint(e);
+      const auto p = edge_midpoint(surface, e);
       int nearest = 0;
       double best = 1e300;
       for (int a = 0; a < 3; ++a) {

@@ -90,6 +90,13 @@ void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const st
 using InterfaceSegments = std::vector<std::array<std::int64_t, 2>>;
 using SegmentsAtEdge = std::unordered_map<std::int64_t, std::array<int, 2>>;
 
+// The midpoint of the surface edge with key `edge` (the interface crosses the edge there).
+inline std::array<double, 3> edge_midpoint(const SurfaceMesh& surface, std::int64_t edge) {
+  const auto& a = surface.vertices[std::size_t(edge >> 32)];
+  const auto& b = surface.vertices[std::size_t(edge & 0xffffffff)];
+  return {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+}
+
 // Marks the sides of the flood box (below x y z, above x y z) where an interface curve that comes within
 // `near` of `point` ends: such a curve ends where the box cuts its membrane, and the box grows there.
 void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const InterfaceSegments& segments,
