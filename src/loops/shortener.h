@@ -86,6 +86,7 @@ struct Shortener {
   struct Arc { double len; int to; int sign; };  // 16 bytes: the search reads them in runs
   std::vector<int> arc_start;
   std::vector<Arc> arcs;
+  std::vector<P3> position;  // per band vertex, for the search's lower bound
   void build_arcs();
   // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices.
   std::vector<int> shortest_loop_through(int s, double& length) const;

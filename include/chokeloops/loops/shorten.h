@@ -9,9 +9,11 @@
 //     which the loop winds once; otherwise the ring count is lowered until it is (0 rings left: the loop is
 //     returned unchanged, `rings` = 0). The Euler characteristic of every ring count's band comes from one
 //     pass over the candidate faces, so that counts whose band is no annulus are refused without building it.
-//  2. Shortest edge loop: the band is cut along a dual path from one boundary curve to the other; a
-//     Dijkstra in the (truncated) cyclic cover of the band from a vertex to its lift one sheet up gives the
-//     shortest edge loop through that vertex in the loop's class; run from the loop's first vertex and
+//  2. Shortest edge loop: the band is cut along a dual path from one boundary curve to the other; an A*
+//     search (Dijkstra ordered by distance plus the straight line to the target) in two sheets of the
+//     band's cyclic cover, from a vertex to its lift one sheet on, gives the shortest edge loop through
+//     that vertex in the loop's class that crosses the cut no more backward than forward (a shortest
+//     loop across a cut that runs straight over the band does); run from the loop's first vertex and
 //     `cut_samples` vertices along the cut, then from the midpoint of the best result until it stops
 //     improving.
 //  3. String pulling: the triangle strip around that edge loop (at each vertex, the fan on the side of
