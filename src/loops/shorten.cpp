@@ -273,8 +273,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     const auto& t = clock.ms;
     std::fprintf(stderr,
                  "shorten steps ms: region %.3f candidates %.3f bands %.3f arcs %.3f searches %.3f swaps %.3f (%d rounds) "
-                 "polish %.3f windows %d fallbacks %d\n",
-                 t[0], t[1], t[2], t[3], t[4], t[5], rounds, t[6], sh.refunnel_windows, sh.refunnel_fallbacks);
+                 "polish %.3f; %ld search nodes, %d refunnel windows, %d fallbacks\n",
+                 t[0], t[1], t[2], t[3], t[4], t[5], rounds, t[6], sh.search_nodes.load(), sh.refunnel_windows,
+                 sh.refunnel_fallbacks);
   }
   if (pts.size() >= 3 && Lp <= R.length) {
     R.points = pts;

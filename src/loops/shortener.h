@@ -2,6 +2,7 @@
 // Internals of shorten_loop shared by its three files: the annulus band around the loop, the Shortener that
 // holds it (steps 1-2 in shorten_band.cpp, step 3 in shorten_strip.cpp) and the small 3D helpers they use.
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <vector>
 
@@ -90,6 +91,9 @@ struct Shortener {
   void build_arcs();
   // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices.
   std::vector<int> shortest_loop_through(int s, double& length) const;
+  // Nodes the searches took (CHOKELOOPS_DEBUG_SHORTEN prints them): the searches of one call run in
+  // parallel, hence atomic.
+  mutable std::atomic<long> search_nodes{0};
 
   // ---- Step 3: strip and funnel (shorten_strip.cpp) ----------------------------------------------
   // Fan of faces around path vertex p (from in-edge a->p to out-edge p->b), on the left or the right.
