@@ -398,3 +398,64 @@ TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
   EXPECT_LT(L, first);
   EXPECT_NEAR(L, 2 * M_PI * r, 0.03 * 2 * M_PI * r);
 }
+
+// The search for the shortest edge loop through a vertex runs either way round the band (the caller picks
+// the way that takes fewer nodes): both give a loop of the same length, through the vertex and starting
+// there, joined by mesh edges, winding as the input loop does across the cut; and the choice follows where
+// the cut lies on the loop. A wiggly meridian of a torus, from every twentieth vertex of its band.
+TEST(Shorten, SearchEitherWayRoundGivesTheSameLoopLength) {
+  auto m = extract_zero_surface(sample_field({48, 48, 48}, analytic::torus(0.3, 0.1)));
+  auto adj = build_adjacency(m);
+  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
+  const int rings = 6;
+  LoopRegion lr = loop_region(m, adj, loop, rings);
+  const auto& [rid, region, ring, near] = lr;
+  const auto c = shorten_detail::band_candidates(m, adj, region, rid, ring, near, rings);
+  shorten_detail::Shortener sh(m, adj);
+  ASSERT_TRUE(sh.build_band(c, rings, loop));
+  sh.build_arcs();
+  int searched = 0, near_ahead = 0;
+  for (std::size_t v = 0; v < sh.band.global.size(); v += 20) {
+    double forward_length = 0, backward_length = 0;
+    const auto forward = sh.shortest_loop_through(int(v), forward_length, false);
+    const auto backward = sh.shortest_loop_through(int(v), backward_length, true);
+    ASSERT_FALSE(forward.empty());
+    ASSERT_FALSE(backward.empty());
+    EXPECT_NEAR(backward_length, forward_length, 1e-12 * forward_length) << "band vertex " << v;
+    for (const auto* path : {&forward, &backward}) {
+      ASSERT_EQ(path->front(), sh.band.global[v]);
+      int winding = 0;
+      double length = 0;
+      for (std::size_t i = 0; i < path->size(); ++i) {
+        const int a = (*path)[i], b = (*path)[(i + 1) % path->size()];
+        ASSERT_TRUE(adj.has_edge(m, a, b));
+        winding += sh.signed_edge_sign(a, b);
+        length += shorten_detail::dist3(m.vertices[std::size_t(a)], m.vertices[std::size_t(b)]);
+      }
+      EXPECT_EQ(winding, sh.band.winding);
+      EXPECT_NEAR(length, forward_length, 1e-9);
+    }
+    // Walking the loop on from v, the first edge that crosses the cut starts before half its length, or
+    // after; the first crossing the reversed loop meets is the last one of the loop read forward.
+    double along = 0, first = -1, last = -1;
+    for (std::size_t i = 0; i < forward.size(); ++i) {
+      const int a = forward[i], b = forward[(i + 1) % forward.size()];
+      const double e = shorten_detail::dist3(m.vertices[std::size_t(a)], m.vertices[std::size_t(b)]);
+      if (sh.signed_edge_sign(a, b) != 0) {
+        if (first < 0) first = along;
+        last = along + e;  // where the reversed loop, walked from v, reaches this edge's start
+      }
+      along += e;
+    }
+    ASSERT_GE(first, 0);
+    const bool ahead = sh.cut_is_near_ahead(forward, int(v));
+    EXPECT_EQ(ahead, first < along / 2) << "band vertex " << v;
+    std::vector<int> reversed(forward.rbegin(), forward.rend());
+    EXPECT_EQ(sh.cut_is_near_ahead(reversed, int(v)), along - last < along / 2) << "band vertex " << v;
+    near_ahead += ahead;
+    ++searched;
+  }
+  EXPECT_GT(searched, 20);
+  EXPECT_GT(near_ahead, 0);
+  EXPECT_LT(near_ahead, searched);
+}

@@ -172,7 +172,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     std::vector<std::vector<int>> paths(starts.size());
     std::vector<double> lengths(starts.size(), std::numeric_limits<double>::infinity());
     tbb::parallel_for(std::size_t(0), starts.size(), [&](std::size_t i) {
-      if (starts[i] >= 0) paths[i] = sh.shortest_loop_through(starts[i], lengths[i]);
+      if (starts[i] < 0) return;
+      const bool backward = i == 0 && sh.cut_is_near_ahead(loop, starts[i]);  // the cut samples lie on it
+      paths[i] = sh.shortest_loop_through(starts[i], lengths[i], backward);
     });
     for (std::size_t i = 0; i < starts.size(); ++i)
       if (!paths[i].empty() && lengths[i] < best_len - 1e-12) best = paths[i], best_len = lengths[i], s = starts[i];
@@ -188,7 +190,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   for (int it = 0; it < 16 && s >= 0; ++it) {
     double L;
     ++descents;
-    auto P = sh.shortest_loop_through(s, L);
+    auto P = sh.shortest_loop_through(s, L, !best.empty() && sh.cut_is_near_ahead(best, s));
     if (P.empty() || !(L < best_len - 1e-12)) break;
     best = P, best_len = L;
     double acc = 0;  // next start: the vertex at half the length

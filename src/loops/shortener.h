@@ -89,8 +89,13 @@ struct Shortener {
   std::vector<Arc> arcs;
   std::vector<P3> position;  // per band vertex, for the search's lower bound
   void build_arcs();
-  // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices.
-  std::vector<int> shortest_loop_through(int s, double& length) const;
+  // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices, in the
+  // input loop's direction. `backward`: search the loop the other way round (the same loops; the search
+  // takes fewer nodes when the cut lies a short way ahead of s, see cut_is_near_ahead).
+  std::vector<int> shortest_loop_through(int s, double& length, bool backward = false) const;
+  // Whether, walking `loop` (mesh vertices, through band vertex s) on from s in its own direction, the
+  // first crossing of the cut comes before half the loop's length.
+  bool cut_is_near_ahead(const std::vector<int>& loop, int s) const;
   // Nodes the searches took (CHOKELOOPS_DEBUG_SHORTEN prints them): the searches of one call run in
   // parallel, hence atomic.
   mutable std::atomic<long> search_nodes{0};
