@@ -86,6 +86,23 @@ LoopRegion loop_region(const SurfaceMesh& m, const MeshAdjacency& adj, const std
   for (std::size_t i = 0; i < r.region.size(); ++i) r.near[i] = r.ring[i] == 0 ? 2 : r.ring[i] == 1 ? 1 : 0;
   return r;
 }
+
+// A wiggly meridian of a thin torus (R 0.3, r 0.1) sampled at n^3, snapped to the surface's edges, with its
+// region of max_k rings: the band tests' loop.
+struct MeridianOnTorus {
+  SurfaceMesh m;
+  MeshAdjacency adj;
+  std::vector<int> loop;
+  LoopRegion region;
+};
+MeridianOnTorus wiggly_meridian_on_torus(int n, int max_k) {
+  MeridianOnTorus t;
+  t.m = extract_zero_surface(sample_field({n, n, n}, analytic::torus(0.3, 0.1)));
+  t.adj = build_adjacency(t.m);
+  t.loop = snap_polyline_to_edge_path(t.m, t.adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
+  t.region = loop_region(t.m, t.adj, t.loop, max_k);
+  return t;
+}
 }  // namespace
 
 TEST(Shorten, WigglyMeridianBecomesGeodesicMeridian) {
@@ -305,11 +322,9 @@ TEST(Shorten, DenseIntMapAgreesWithUnorderedMapAndStartsEmptyFromThePool) {
 // meridian of a thin torus whose band wraps round the tube as it widens, with and without vertices barred
 // (holes in the band, and faces that enter only because they touch the loop).
 TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
-  auto m = extract_zero_surface(sample_field({40, 40, 40}, analytic::torus(0.3, 0.1)));
-  auto adj = build_adjacency(m);
-  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
   const int max_k = 40;
-  LoopRegion lr = loop_region(m, adj, loop, max_k);
+  const MeridianOnTorus torus = wiggly_meridian_on_torus(40, max_k);
+  const auto& [m, adj, loop, lr] = torus;
   const auto& [rid, region, ring, near] = lr;
   int annuli = 0, not_annuli = 0, touching_only = 0;
   for (int barred_every : {0, 7}) {
@@ -404,11 +419,9 @@ TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
 // there, joined by mesh edges, winding as the input loop does across the cut; and the choice follows where
 // the cut lies on the loop. A wiggly meridian of a torus, from every twentieth vertex of its band.
 TEST(Shorten, SearchEitherWayRoundGivesTheSameLoopLength) {
-  auto m = extract_zero_surface(sample_field({48, 48, 48}, analytic::torus(0.3, 0.1)));
-  auto adj = build_adjacency(m);
-  auto loop = snap_polyline_to_edge_path(m, adj, wiggly_meridian({0.5, 0.5, 0.5}, 0.3, 0.1, 0.4, 0.1, 3));
   const int rings = 6;
-  LoopRegion lr = loop_region(m, adj, loop, rings);
+  const MeridianOnTorus torus = wiggly_meridian_on_torus(48, rings);
+  const auto& [m, adj, loop, lr] = torus;
   const auto& [rid, region, ring, near] = lr;
   const auto c = shorten_detail::band_candidates(m, adj, region, rid, ring, near, rings);
   shorten_detail::Shortener sh(m, adj);
