@@ -297,17 +297,16 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   // Two sheets of the cover: the one the search starts on and the next one in the loop's winding
   // direction (sheet = crossings of the cut so far, times the winding). A path that dips into a third
   // sheet crosses the cut back and forth, which a cut that runs straight across the band (the fewest
-  // faces from one border to the other) rarely lets a shortest loop do. With the A* below, the nodes
-  // taken in a one-thread run on the pierced block went from 22.1M (a Dijkstra over sheets -3..3) to
-  // 14.2M, the sheet behind the start having held about a quarter of them; choosing the way round as
-  // below, to 11.9M. The searches of one band reuse
-  // their arrays (one set per thread): only the nodes a search touched are reset, so a search costs what
-  // it explores, not the band's size. Of the two ways round, the search takes all of the start's sheet
-  // and the part of the next one from the cut to the start: searching backward when the cut lies a short
-  // way ahead of the start takes the shorter part (see the caller).
+  // faces from one border to the other) rarely lets a shortest loop do. Of the two ways round, the search
+  // takes all of the start's sheet and the part of the next one from the cut on to the start: searching
+  // backward when the cut lies a short way ahead of the start takes the shorter part (see the caller).
+  // Nodes taken in a one-thread run on the pierced block: 22.1M with a Dijkstra over sheets -3..3 (the
+  // sheet behind the start held about a quarter of them), 14.2M with these two and the A* below, 11.9M
+  // with the way round chosen. The searches of one band reuse their arrays (one set per thread): only the
+  // nodes a search touched are reset, so a search costs what it explores, not the band's size.
   constexpr int NL = 2;
   struct Scratch {
-    std::vector<double> d;
+    std::vector<double> d, bound;  // per node; per band vertex (negative: not computed yet)
     std::vector<int> from, touched;
     std::vector<QueueEntry> queue;
   };
@@ -320,6 +319,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
     d.assign(nodes, std::numeric_limits<double>::infinity());
     from.assign(nodes, -1);
   }
+  if (scratch.bound.size() < band.global.size()) scratch.bound.assign(band.global.size(), -1);
   touched.clear();
   auto& q = scratch.queue;
   q.clear();
@@ -328,11 +328,15 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   // A*: a node is taken in the order of its distance plus the straight line from it to s (the target's
   // point in space), a lower bound of what is left that never drops by more than an arc's length along
   // an arc; so the first time the target is taken its distance is the shortest, as in Dijkstra, and the
-  // nodes whose distance plus that bound exceed the loop's length are never taken.
-  // The heap holds that sum; an entry is current when its sum is the node's distance plus its bound,
-  // computed alike.
+  // nodes whose distance plus that bound exceed the loop's length are never taken. The heap holds that
+  // sum; an entry is current when its sum is the node's distance plus its bound, one addition of the same
+  // two numbers (each vertex's bound is computed once a search), so the test is exact.
   const P3 target = position[std::size_t(s)];
-  auto bound = [&](int v) { return dist3(position[std::size_t(v)], target); };
+  auto bound = [&](int v) {
+    double& b = scratch.bound[std::size_t(v)];
+    if (b < 0) b = dist3(position[std::size_t(v)], target);
+    return b;
+  };
   d[src] = 0;
   touched.push_back(src);
   heap_push(q, {0, src});
@@ -370,7 +374,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
       std::rotate(path.begin(), path.end() - 1, path.end());
     }
   }
-  for (int w : touched) d[w] = std::numeric_limits<double>::infinity(), from[w] = -1;
+  for (int w : touched) d[w] = std::numeric_limits<double>::infinity(), from[w] = -1, scratch.bound[std::size_t(w / NL)] = -1;
   return path;
 }
 
