@@ -360,7 +360,6 @@ class LoopTracer {
       }
     std::sort(sorted_faces.begin(), sorted_faces.end());
     sorted_faces.erase(std::unique(sorted_faces.begin(), sorted_faces.end()), sorted_faces.end());
-    auto key = [](int a, int b) { return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a; };
     detail::InterfaceSegments segments;
     for (int fi : sorted_faces) {  // every corner labelled, both labels present (the filter above)
       const auto& F = S_.faces[fi];
@@ -368,7 +367,7 @@ class LoopTracer {
       std::array<std::int64_t, 2> seg;
       int m = 0;
       for (int q = 0; q < 3; ++q)
-        if (l[q] != l[(q + 1) % 3]) seg[m++] = key(F[q], F[(q + 1) % 3]);
+        if (l[q] != l[(q + 1) % 3]) seg[m++] = detail::edge_key(F[q], F[(q + 1) % 3]);
       segments.push_back(seg);
     }
     detail::SegmentsAtEdge at;

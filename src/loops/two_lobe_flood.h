@@ -90,6 +90,11 @@ void grow_box(BoxExtent& extent, const std::array<char, 6>& open_sides, const st
 using InterfaceSegments = std::vector<std::array<std::int64_t, 2>>;
 using SegmentsAtEdge = std::unordered_map<std::int64_t, std::array<int, 2>>;
 
+// The key of the surface edge between vertices a and b.
+inline std::int64_t edge_key(int a, int b) {
+  return a < b ? (std::int64_t(a) << 32) | b : (std::int64_t(b) << 32) | a;
+}
+
 // The midpoint of the surface edge with key `edge` (the interface crosses the edge there).
 inline std::array<double, 3> edge_midpoint(const SurfaceMesh& surface, std::int64_t edge) {
   const auto& a = surface.vertices[std::size_t(edge >> 32)];

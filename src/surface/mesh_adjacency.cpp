@@ -43,11 +43,7 @@ bool MeshAdjacency::has_edge(const SurfaceMesh& m, int a, int b) const {
 
 void MeshAdjacency::neighbours(const SurfaceMesh& m, int v, std::vector<int>& out) const {
   out.clear();
-  for (int i = vf_start[std::size_t(v)]; i < vf_start[std::size_t(v) + 1]; ++i) {
-    const auto& t = m.faces[std::size_t(vf[std::size_t(i)])];
-    for (int k = 0; k < 3; ++k)
-      if (t[k] == v) out.push_back(t[(k + 1) % 3]), out.push_back(t[(k + 2) % 3]);
-  }
+  for_each_neighbour(m, v, [&](int w) { out.push_back(w); });
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }

@@ -32,6 +32,12 @@ struct MeshAdjacency {
   // The vertices joined to v by an edge, rising, read from v's faces: a neighbour list per vertex would be
   // another 4 bytes a half-edge to allocate and fill, and its readers are local searches.
   void neighbours(const SurfaceMesh& m, int v, std::vector<int>& out) const;
+  // fn(w) for the same vertices, unsorted, for searches that cannot afford a sort per vertex: the vertex
+  // after v in each of its faces, and the one before it where no face runs the other way along that edge
+  // (a border, or faces whose orientations disagree). Each neighbour once on a closed, consistently
+  // oriented surface; one across a non-manifold edge may come twice.
+  template <class Fn>
+  void for_each_neighbour(const SurfaceMesh& m, int v, Fn&& fn) const;
   // The vertex nearest to p among those within `radius` of it for which accept(v) is true, or -1.
   template <class Accept>
   int nearest_vertex(const SurfaceMesh& m, const std::array<double, 3>& p, double radius, Accept&& accept) const;
@@ -89,6 +95,20 @@ int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double,
     if (gap > 0 && best >= 0 && best_d2 < gap * gap) break;
   }
   return best;
+}
+
+template <class Fn>
+void MeshAdjacency::for_each_neighbour(const SurfaceMesh& m, int v, Fn&& fn) const {
+  for (int j = vf_start[std::size_t(v)]; j < vf_start[std::size_t(v) + 1]; ++j) {
+    const int f = vf[std::size_t(j)];
+    const auto& t = m.faces[std::size_t(f)];
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] != v) continue;
+      fn(t[(k + 1) % 3]);
+      const int before = twin[std::size_t(prev(3 * f + k))];
+      if (before < 0 || m.faces[std::size_t(before / 3)][before % 3] != v) fn(t[(k + 2) % 3]);
+    }
+  }
 }
 
 MeshAdjacency build_adjacency(const SurfaceMesh& mesh);
