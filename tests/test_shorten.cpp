@@ -373,10 +373,12 @@ TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
   EXPECT_GT(touching_only, 0);
 }
 
-// Step 3's rounds redo the funnel only in windows around the swaps (Shortener::refunnel): after every round,
-// the loop must be the one a funnel over the whole strip gives, on a torus whose strip unfolds without
-// overlapping itself. A very wiggly meridian's own edge loop makes many rounds with swaps far apart.
-TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
+// Step 3's rounds redo the funnel only in windows around the swaps (Shortener::refunnel), or once round the
+// strip held at an apex the swaps left (Shortener::funnel_through_apex): after every round, either must give
+// the loop a funnel over the whole strip gives (relax), on a torus whose strip unfolds without overlapping
+// itself. A very wiggly meridian's own edge loop makes many rounds with swaps far apart. Held at a vertex
+// the shortest loop does not pass through, the funnel through it must see so and still give that loop.
+TEST(Shorten, FunnelRedoneInWindowsOrThroughAnApexEqualsTheFunnelOverTheWholeStrip) {
   const double R = 0.3, r = 0.12;
   auto m = extract_zero_surface(sample_field({128, 128, 128}, analytic::torus(R, r)));
   auto adj = build_adjacency(m);
@@ -399,17 +401,38 @@ TEST(Shorten, FunnelRedoneInWindowsEqualsTheFunnelOverTheWholeStrip) {
     std::vector<shorten_detail::Shortener::Apex> kept, whole_apexes;
     std::vector<std::array<int, 2>> dirty;
     if (!sh.swap_batch(S2, s2, apexes, 1 << 30, kept, dirty)) break;
-    std::vector<double> whole = s2;
+    std::vector<double> whole = s2, through_apex = s2;
+    std::vector<shorten_detail::Shortener::Apex> apex_kept = kept;
     const double L_whole = sh.relax(S2, 0, whole, whole_apexes);
+    const double L_apex = sh.funnel_through_apex(S2, through_apex, apex_kept, dirty);
     const double L_windows = sh.refunnel(S2, s2, kept, dirty);
     ASSERT_NEAR(L_windows, L_whole, 1e-9 * L_whole) << "round " << rounds;
+    ASSERT_NEAR(L_apex, L_whole, 1e-9 * L_whole) << "round " << rounds;
     if (!(L_windows < L + 1e-9 * L)) break;
     S.swap(S2), s.swap(s2), apexes.swap(kept), L = L_windows;
   }
-  std::printf("wiggly meridian: edge loop relaxed %.6f -> %.6f after %d rounds (%d windows, %d whole-strip funnels), 2 pi r %.6f\n",
-              first, L, rounds, sh.refunnel_windows, sh.refunnel_fallbacks, 2 * M_PI * r);
+  std::printf("wiggly meridian: edge loop relaxed %.6f -> %.6f after %d rounds (%d windows, %d whole-strip funnels; "
+              "%d funnels through an apex, %d of those calls relaxed), 2 pi r %.6f\n",
+              first, L, rounds, sh.refunnel_windows, sh.refunnel_fallbacks, sh.apex_funnels, sh.apex_funnels_relaxed, 2 * M_PI * r);
   EXPECT_GT(rounds, 10);
   EXPECT_GT(sh.refunnel_windows, 20);
+  EXPECT_GE(sh.apex_funnels, rounds);
+  EXPECT_LT(sh.apex_funnels_relaxed, rounds / 4);
+  // Held at the far end of a portal the loop crosses inside (not at an apex): the loop pulls off it.
+  int wrong_vertices = 0;
+  for (int p = 0; p < int(S.size()); p += 7) {
+    if (s[std::size_t(p)] < 0.05 || s[std::size_t(p)] > 0.95) continue;
+    const int h = sh.portal_of(S[std::size_t(p)], S[std::size_t(p + 1) % S.size()]);
+    const int far_end = s[std::size_t(p)] < 0.5 ? sh.vert_to(h) : sh.vert(h);  // s = 0 is vert(h)
+    std::vector<double> held = s;
+    std::vector<shorten_detail::Shortener::Apex> one{{p, far_end}};
+    const int funnels_before = sh.apex_funnels;
+    const double L_held = sh.funnel_through_apex(S, held, one, {});
+    ASSERT_NEAR(L_held, L, 1e-9 * L) << "portal " << p;
+    EXPECT_GE(sh.apex_funnels - funnels_before, 2) << "portal " << p;  // the first cut cannot be kept
+    ++wrong_vertices;
+  }
+  EXPECT_GT(wrong_vertices, 10);
   EXPECT_LT(L, first);
   EXPECT_NEAR(L, 2 * M_PI * r, 0.03 * 2 * M_PI * r);
 }

@@ -62,26 +62,37 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   const int max_rings = std::max(1, opt.max_rings);
   detail::DenseIntMap rid(mesh.vertices.size());
   std::vector<int> region, ring;
+  // Each vertex's distance along its BFS path from the loop bounds its surface distance from above: when
+  // no bound exceeds max_move, the distances cannot limit the band and the Dijkstra is not run (on the
+  // cage no distance came within a quarter of max_move of it; the Dijkstra was nearly half this step).
+  std::vector<double> upper;
+  double upper_max = 0;
   for (int v : loop)
-    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0);
-  // Each region vertex's neighbours in the region, for the distances below: every neighbour of an inner
-  // vertex is in the region once that vertex is expanded, and the last ring comes after all others.
-  std::vector<int> next_start{0}, next;
-  const bool distances = opt.max_move > 0;
+    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0), upper.push_back(0);
   for (size_t i = 0; i < region.size(); ++i) {
     const int v = region[i];
-    if (ring[i] >= max_rings && !distances) continue;
-    // Unsorted (a sort per vertex was a fifth of this step); a neighbour met twice across a non-manifold
-    // edge costs the distances below a repeated arc and nothing else.
+    if (ring[i] >= max_rings) continue;
+    const auto& p = mesh.vertices[std::size_t(v)];
+    // Unsorted (a sort per vertex was a fifth of this step).
     adj.for_each_neighbour(mesh, v, [&](int w) {
-      if (ring[i] < max_rings && rid.emplace(w, int(region.size()))) region.push_back(w), ring.push_back(ring[i] + 1);
-      if (distances)
-        if (const int* wi = rid.find(w)) next.push_back(*wi);
+      if (!rid.emplace(w, int(region.size()))) return;
+      region.push_back(w), ring.push_back(ring[i] + 1);
+      upper.push_back(upper[i] + dist3(p, mesh.vertices[std::size_t(w)]));
+      upper_max = std::max(upper_max, upper.back());
     });
-    if (distances) next_start.push_back(int(next.size()));
   }
+  const bool distances = opt.max_move > 0;
   std::vector<double> dist;
-  if (distances) {
+  auto compute_distances = [&] {
+    // Each region vertex's neighbours in the region; a neighbour met twice across a non-manifold edge costs
+    // a repeated arc and nothing else.
+    std::vector<int> next_start{0}, next;
+    for (int v : region) {
+      adj.for_each_neighbour(mesh, v, [&](int w) {
+        if (const int* wi = rid.find(w)) next.push_back(*wi);
+      });
+      next_start.push_back(int(next.size()));
+    }
     dist.assign(region.size(), std::numeric_limits<double>::infinity());
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
@@ -97,7 +108,8 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
         if (nd < dist[std::size_t(wi)]) dist[std::size_t(wi)] = nd, q.push({nd, wi});
       }
     }
-  }
+  };
+  if (distances && upper_max > opt.max_move) compute_distances();
   std::vector<char> near_loop(region.size(), 0);
   for (size_t i = 0; i < region.size(); ++i)
     if (ring[i] <= 1) near_loop[i] = ring[i] == 0 ? 2 : 1;
@@ -194,6 +206,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   R.edge_path_length = best_len;
   {
     const double edge = best_len / double(best.size());  // the loop's mean edge length
+    if (distances && dist.empty() && upper_max > opt.max_move - 2 * edge) compute_distances();
     for (int v : best) {
       const std::size_t i = std::size_t(rid.at(v));
       if (ring[i] >= rings - 1 || (!dist.empty() && dist[i] > opt.max_move - 2 * edge)) {
@@ -251,7 +264,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   }
   // The windows kept every crossing but the one the first funnel was cut at; a funnel over the whole
   // strip settles that one too.
-  if (R.swaps > 0) L = sh.relax(S, 0, sp, apexes);
+  if (R.swaps > 0) L = sh.funnel_through_apex(S, sp, apexes, {});
   clock.lap(StepClock::kSwaps);
   sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
@@ -263,9 +276,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     const auto& t = clock.ms;
     std::fprintf(stderr,
                  "shorten steps ms: region %.3f candidates %.3f bands %.3f arcs %.3f searches %.3f swaps %.3f (%d rounds) "
-                 "polish %.3f; %ld search nodes, %d refunnel windows, %d fallbacks\n",
+                 "polish %.3f; %ld search nodes, %d refunnel windows, %d fallbacks, %d apex funnels (%d relaxed)\n",
                  t[0], t[1], t[2], t[3], t[4], t[5], rounds, t[6], sh.search_nodes.load(), sh.refunnel_windows,
-                 sh.refunnel_fallbacks);
+                 sh.refunnel_fallbacks, sh.apex_funnels, sh.apex_funnels_relaxed);
   }
   if (pts.size() >= 3 && Lp <= R.length) {
     R.points = pts;

@@ -98,7 +98,7 @@ double Shortener::funnel(const std::vector<int>& S, int c, std::vector<double>& 
 }
 
 void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to,
-                               std::vector<double>& s, std::vector<Apex>& apexes) {
+                               std::vector<double>& s, std::vector<Apex>& apexes, double* end_angle) {
   const int m = int(S.size());
   thread_local FunnelScratch scratch;
   auto& [L2, R2, Lv, Rv, pts, pidx, pside] = scratch;
@@ -113,7 +113,9 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
     h = portal_of(S[(from + i) % m], S[(from + i + 1) % m]);  // exit portal: its endpoints are vertices of that face
     int x = vert(he), y = vert_to(he), z = vert(MeshAdjacency::prev(he));
     P2 X = L2[i - 1], Y = R2[i - 1];
-    double dxy = len2(X, Y), dxz = dist3(mesh.vertices[x], mesh.vertices[z]), dyz = dist3(mesh.vertices[y], mesh.vertices[z]);
+    // The entry edge measured in 3D, not from its unfolded ends: the same length, and no square root on the
+    // chain that carries each face's unfolding to the next.
+    double dxy = dist3(mesh.vertices[x], mesh.vertices[y]), dxz = dist3(mesh.vertices[x], mesh.vertices[z]), dyz = dist3(mesh.vertices[y], mesh.vertices[z]);
     double a = (dxz * dxz - dyz * dyz + dxy * dxy) / (2 * dxy);
     double bb = std::sqrt(std::max(0.0, dxz * dxz - a * a));
     P2 u{(Y.x - X.x) / dxy, (Y.y - X.y) / dxy}, perp{-u.y, u.x};
@@ -163,6 +165,23 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
     }
   }
   pts.push_back(end), pidx.push_back(count), pside.push_back(-1);
+  if (end_angle) {
+    // The angles the first and last segments make with the cut portal, each in its own unfolding (the
+    // portal's two copies are congruent), sum to the angle through the strip at the crossing held.
+    *end_angle = -1;
+    const int n = int(pts.size());
+    int first = 1, last = n - 2;
+    while (first < n && same(pts[first], start)) ++first;
+    while (last >= 0 && same(pts[last], end)) --last;
+    if (first < n && last >= 0) {
+      auto angle = [](P2 at, P2 a, P2 b) {
+        const P2 u{a.x - at.x, a.y - at.y}, v{b.x - at.x, b.y - at.y};
+        return std::atan2(std::fabs(u.x * v.y - u.y * v.x), u.x * v.x + u.y * v.y);
+      };
+      const P2 other_start = s_from == 0.0 ? R2[0] : L2[0], other_end = s_to == 0.0 ? R2[count] : L2[count];
+      *end_angle = angle(start, other_start, pts[first]) + angle(end, other_end, pts[last]);
+    }
+  }
   // Crossing parameters. The funnel assumes a sleeve that unfolds without overlapping itself; where the
   // strip overlaps (tiny faces near clamped vertices, fans of more than 2*pi) its 2D length can be
   // optimistic, so callers measure the polyline actually built from the crossings.
@@ -260,6 +279,66 @@ double Shortener::relax(const std::vector<int>& S, int c, std::vector<double>& s
   return best;
 }
 
+// Why one or two funnels can suffice: with the crossing of the cut portal held, the funnel gives the
+// shortest loop through that crossing. The loop's length is a convex function of its crossings, so that
+// loop is the strip's shortest as soon as moving the held crossing along its portal does not shorten it:
+// when the loop runs straight through it (angle pi between its segments there), or, held at a vertex, when
+// the angle through the strip between its segments there is at least pi. The cut goes where the swaps
+// changed least (an apex they left, else a portal), and once more at the apex the first funnel found
+// farthest from its cut; relax() only when neither holds. relax() alternates cuts and takes three or more.
+double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
+                                      const std::vector<std::array<int, 2>>& dirty) {
+  const int m = int(S.size());
+  auto forward = [m](int from, int to) { return ((to - from) % m + m) % m; };
+  auto clearance = [&](int portal) {
+    int nearest = m;
+    for (const auto& range : dirty) nearest = std::min({nearest, forward(portal, range[0]), forward(range[1], portal)});
+    return nearest;
+  };
+  int cut = -1, vertex = -1, best = -1;
+  for (const Apex& a : apexes)
+    if (const int c = clearance(a.portal); c > best) best = c, cut = a.portal, vertex = a.vertex;
+  if (cut < 0)
+    for (int p = 0; p < m; ++p)
+      if (const int c = clearance(p); c > best) best = c, cut = p;
+  std::vector<double> held;
+  std::vector<Apex> found;
+  // One funnel cut at `portal`, held at `vertex` (or, with -1, at the crossing it has); true when optimal.
+  auto try_cut = [&](int portal, int at_vertex) {
+    held = s;
+    const int h = portal_of(S[std::size_t(portal)], S[std::size_t(portal + 1) % std::size_t(m)]);
+    if (at_vertex >= 0) {
+      if (at_vertex != vert(h) && at_vertex != vert_to(h)) return false;
+      held[std::size_t(portal)] = at_vertex == vert(h) ? 0.0 : 1.0;
+    }
+    const double at = held[std::size_t(portal)];
+    found.clear();
+    double angle = -1;
+    funnel_segment(S, portal, m, at, at, held, found, &angle);
+    ++apex_funnels;
+    constexpr double kTolerance = 1e-9;  // radians
+    const bool on_vertex = at == 0.0 || at == 1.0;
+    if (angle < 0 || (on_vertex ? angle < M_PI - kTolerance : std::fabs(angle - M_PI) > kTolerance)) return false;
+    if (on_vertex) found.push_back({portal, at == 0.0 ? vert(h) : vert_to(h)});
+    std::sort(found.begin(), found.end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
+    s.swap(held);
+    apexes.swap(found);
+    return true;
+  };
+  if (cut >= 0) {
+    if (try_cut(cut, vertex)) return params_length(S, s);
+    int again = -1, far = -1;
+    for (const Apex& a : found)
+      if (const int d = std::min(forward(cut, a.portal), forward(a.portal, cut)); d > far) far = d, again = int(&a - found.data());
+    if (again >= 0) {
+      const Apex a = found[std::size_t(again)];
+      if (try_cut(a.portal, a.vertex)) return params_length(S, s);
+    }
+  }
+  ++apex_funnels_relaxed;
+  return relax(S, 0, s, apexes);
+}
+
 // Why windows suffice: the shortest path through a sleeve between two fixed points is unique, and where it
 // bends it wraps a sleeve vertex (an apex). Between two apexes that a swap did not move, the path is the
 // shortest one through the faces between them; so if the funnel over a window from apex E1 to apex E2 still
@@ -324,7 +403,7 @@ double Shortener::refunnel(const std::vector<int>& S, std::vector<double>& s, st
     }
     if (!done) {
       ++refunnel_fallbacks;
-      return relax(S, 0, s, apexes);
+      return funnel_through_apex(S, s, apexes, dirty);
     }
   }
   return params_length(S, s);

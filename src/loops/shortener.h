@@ -115,13 +115,16 @@ struct Shortener {
   // The funnel from the crossing s_from of portal `from` to the crossing s_to of portal from + count
   // (cyclic) through the faces between them: sets s of the portals strictly between and appends their
   // apexes, in order. count = S.size() with s_to = s_from is the closed loop cut at `from`.
+  // `end_angle`, when given, receives for a closed loop (s_from = s_to) the angle at the held crossing
+  // between the loop's last and first segments, on the side of the portal's left end (its right end when
+  // held at the left end): pi where the loop runs straight through.
   void funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to, std::vector<double>& s,
-                      std::vector<Apex>& apexes);
+                      std::vector<Apex>& apexes, double* end_angle = nullptr);
   // After swaps, the funnel again only where the strip changed: `dirty` lists portal ranges [first, last]
   // whose inner crossings are unknown; `apexes` (the old ones outside those ranges, in portal order)
   // anchor each range's funnel between the apexes around it, widened until the apexes next to the range
   // stay apexes (then the path outside is still the shortest, see shorten_strip.cpp). Falls back to
-  // relax() when a window would cover the loop. Returns the length.
+  // funnel_through_apex() when a window would cover the loop. Returns the length.
   double refunnel(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
                   const std::vector<std::array<int, 2>>& dirty);
   int refunnel_windows = 0, refunnel_fallbacks = 0;  // how refunnel went, for the tests
@@ -135,6 +138,11 @@ struct Shortener {
   Polyline3 strip_points(const std::vector<int>& S, const std::vector<double>& s) const;
   // Alternate the cut portal until the length stops decreasing.
   double relax(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
+  // The funnel round the whole strip cut at one of `apexes`, the one farthest from the `dirty` ranges,
+  // with the loop held at its vertex; relax() when the loop would pull off that vertex into the strip.
+  double funnel_through_apex(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
+                             const std::vector<std::array<int, 2>>& dirty);
+  int apex_funnels = 0, apex_funnels_relaxed = 0;  // how funnel_through_apex went, for the trace and tests
 
   // Faces around v from f_a the other way round to f_b (f_a and f_b included), or empty.
   std::vector<int> other_fan(int v, int fa, int fb, int fa_next) const;
