@@ -117,9 +117,10 @@ struct Shortener {
   // apexes, in order. count = S.size() with s_to = s_from is the closed loop cut at `from`.
   // `end_angle`, when given, receives for a closed loop (s_from = s_to) the angle at the held crossing
   // between the loop's last and first segments, on the side of the portal's left end (its right end when
-  // held at the left end): pi where the loop runs straight through.
+  // held at the left end): pi where the loop runs straight through; `plane_length` the length of the path
+  // in the plane of the unfolding.
   void funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to, std::vector<double>& s,
-                      std::vector<Apex>& apexes, double* end_angle = nullptr);
+                      std::vector<Apex>& apexes, double* end_angle = nullptr, double* plane_length = nullptr);
   // After swaps, the funnel again only where the strip changed: `dirty` lists portal ranges [first, last]
   // whose inner crossings are unknown; `apexes` (the old ones outside those ranges, in portal order)
   // anchor each range's funnel between the apexes around it, widened until the apexes next to the range
