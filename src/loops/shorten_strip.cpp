@@ -305,6 +305,7 @@ double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<dou
       if (const int c = clearance(p); c > best) best = c, cut = p;
   std::vector<double> held;
   std::vector<Apex> found;
+  double length = 0;
   // One funnel cut at `portal`, held at `vertex` (or, with -1, at the crossing it has); true when optimal.
   auto try_cut = [&](int portal, int at_vertex) {
     held = s;
@@ -324,7 +325,8 @@ double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<dou
     // Where the strip's unfolding overlaps itself the funnel's path can leave it (seen on the pierced
     // block's loops of 1600 faces and more): the path is the strip's only when the polyline through its
     // crossings is as long as the path in the plane.
-    if (!(std::fabs(params_length(S, held) - plane) <= 1e-12 * plane)) return false;
+    length = params_length(S, held);
+    if (!(std::fabs(length - plane) <= 1e-12 * plane)) return false;
     if (on_vertex) found.push_back({portal, at == 0.0 ? vert(h) : vert_to(h)});
     std::sort(found.begin(), found.end(), [](const Apex& x, const Apex& y) { return x.portal < y.portal; });
     s.swap(held);
@@ -332,13 +334,13 @@ double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<dou
     return true;
   };
   if (cut >= 0) {
-    if (try_cut(cut, vertex)) return params_length(S, s);
+    if (try_cut(cut, vertex)) return length;
     int again = -1, far = -1;
     for (const Apex& a : found)
       if (const int d = std::min(forward(cut, a.portal), forward(a.portal, cut)); d > far) far = d, again = int(&a - found.data());
     if (again >= 0) {
       const Apex a = found[std::size_t(again)];
-      if (try_cut(a.portal, a.vertex)) return params_length(S, s);
+      if (try_cut(a.portal, a.vertex)) return length;
     }
   }
   ++apex_funnels_relaxed;
