@@ -357,6 +357,12 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
   std::vector<int> path, around;
   for (size_t i = 0; i < snapped.size(); ++i) {
     const int s = snapped[i], t = snapped[(i + 1) % snapped.size()];
+    // Neighbours (most pairs of a dense polyline): their edge is the shortest path between them, a straight
+    // segment; the search below would find it too, at a hash map and a heap's cost.
+    if (A.has_edge(mesh, s, t)) {
+      path.push_back(s);
+      continue;
+    }
     const double limit = 2 * dist(mesh.vertices[s], mesh.vertices[t]) + 4 * margin;
     state.clear();
     using QE = std::pair<double, int>;
