@@ -177,14 +177,17 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
   EXPECT_LT(near.length, near.input_length);
   EXPECT_GT(near.length, far.length);
   EXPECT_LT(std::fabs(ang2 - t0) * 0.5, leash + 2 * g.voxel_size);
-  auto start_pts = loop_points(m, start);
-  double worst = 0;
-  for (auto& q : near.points) {
-    double best = 1e300;
-    for (auto& p : start_pts) best = std::min(best, std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]));
-    worst = std::max(worst, best);
-  }
-  EXPECT_LE(worst, leash + g.voxel_size);  // no point moved farther than the leash (plus one edge)
+  const auto start_pts = loop_points(m, start);
+  auto farthest_from_start = [&](const Polyline3& points) {  // the farthest any point lies from the start loop
+    double farthest = 0;
+    for (auto& q : points) {
+      double best = 1e300;
+      for (auto& p : start_pts) best = std::min(best, std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]));
+      farthest = std::max(farthest, best);
+    }
+    return farthest;
+  };
+  EXPECT_LE(farthest_from_start(near.points), leash + g.voxel_size);  // no point moved farther than the leash (plus one edge)
   // The region's surface distances are computed only when some vertex's path from the loop is longer than
   // the leash: a leash longer than any such path must give the loop of no leash at all, and every leash
   // must hold its loop.
@@ -193,13 +196,7 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
   EXPECT_EQ(loose.at_band_edge, far.at_band_edge);
   for (double l : {0.03, 0.1, 0.2}) {
     auto held = shorten_loop(m, adj, start, ShortenOptions{l, 60, 400});
-    double farthest = 0;
-    for (auto& q : held.points) {
-      double best = 1e300;
-      for (auto& p : start_pts) best = std::min(best, std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]));
-      farthest = std::max(farthest, best);
-    }
-    EXPECT_LE(farthest, l + g.voxel_size) << "leash " << l;
+    EXPECT_LE(farthest_from_start(held.points), l + g.voxel_size) << "leash " << l;
     EXPECT_LE(held.length, held.input_length) << "leash " << l;
   }
   // The loop tracer slides a loop on only when it stopped at its band's edge: the unleashed loop found the

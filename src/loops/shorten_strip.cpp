@@ -16,6 +16,8 @@ double len2(P2 a, P2 b) { return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.
 // Mononen's triarea2: > 0 when c lies to the right of a->b (y up).
 double triarea2(P2 a, P2 b, P2 c) { return (c.x - a.x) * (b.y - a.y) - (b.x - a.x) * (c.y - a.y); }
 bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
+// Portals from `from` on to `to` round a closed strip of m portals.
+int portals_ahead(int m, int from, int to) { return ((to - from) % m + m) % m; }
 
 // A thread's funnel arrays, kept between calls: a shortening runs the funnel hundreds of times.
 struct FunnelScratch {
@@ -291,7 +293,7 @@ double Shortener::relax(const std::vector<int>& S, int c, std::vector<double>& s
 double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
                                       const std::vector<std::array<int, 2>>& dirty) {
   const int m = int(S.size());
-  auto forward = [m](int from, int to) { return ((to - from) % m + m) % m; };
+  auto forward = [m](int from, int to) { return portals_ahead(m, from, to); };
   auto clearance = [&](int portal) {
     int nearest = m;
     for (const auto& range : dirty) nearest = std::min({nearest, forward(portal, range[0]), forward(range[1], portal)});
@@ -357,7 +359,7 @@ double Shortener::refunnel(const std::vector<int>& S, std::vector<double>& s, st
   const int m = int(S.size());
   std::vector<Apex> found, merged;
   std::vector<char> pending(dirty.size(), 1);
-  auto forward = [m](int from, int to) { return ((to - from) % m + m) % m; };  // portals from `from` to `to`
+  auto forward = [m](int from, int to) { return portals_ahead(m, from, to); };
   for (std::size_t r = 0; r < dirty.size(); ++r) {
     if (!pending[r]) continue;
     pending[r] = 0;

@@ -139,8 +139,10 @@ struct Shortener {
   Polyline3 strip_points(const std::vector<int>& S, const std::vector<double>& s) const;
   // Alternate the cut portal until the length stops decreasing.
   double relax(const std::vector<int>& S, int c, std::vector<double>& s, std::vector<Apex>& apexes);
-  // The funnel round the whole strip cut at one of `apexes`, the one farthest from the `dirty` ranges,
-  // with the loop held at its vertex; relax() when the loop would pull off that vertex into the strip.
+  // The funnel round the whole strip held at the apex farthest from the `dirty` ranges (none left: at the
+  // portal farthest from them, then at the apex that funnel found farthest from its cut), kept when the
+  // loop does not pull off the held point and its polyline is as long as its path in the plane; else
+  // relax(). Returns the length.
   double funnel_through_apex(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
                              const std::vector<std::array<int, 2>>& dirty);
   int apex_funnels = 0, apex_funnels_relaxed = 0;  // how funnel_through_apex went, for the trace and tests
