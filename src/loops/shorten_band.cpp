@@ -306,7 +306,7 @@ bool Shortener::cut_is_near_ahead(const std::vector<int>& loop, int s) const {
   return ahead >= 0 && ahead < total / 2;
 }
 
-std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool backward) const {
+std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool backward, double below) const {
   // Two sheets of the cover: the one the search starts on and the next one in the loop's winding
   // direction (sheet = crossings of the cut so far, times the winding). A path that dips into a third
   // sheet crosses the cut back and forth, which a cut that runs straight across the band (the fewest
@@ -320,7 +320,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   constexpr int NL = 2;
   struct Scratch {
     std::vector<double> d, bound;  // per node; per band vertex (negative: not computed yet)
-    std::vector<int> from, touched;
+    std::vector<int> from, touched, bounded;  // nodes whose d was set; vertices whose bound was computed
     std::vector<QueueEntry> queue;
   };
   static thread_local Scratch scratch;
@@ -334,6 +334,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   }
   if (scratch.bound.size() < band.global.size()) scratch.bound.assign(band.global.size(), -1);
   touched.clear();
+  scratch.bounded.clear();
   auto& q = scratch.queue;
   q.clear();
   const int winding = backward ? -band.winding : band.winding;  // band.winding: +1 or -1 (build_band)
@@ -347,7 +348,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   const P3 target = position[std::size_t(s)];
   auto bound = [&](int v) {
     double& b = scratch.bound[std::size_t(v)];
-    if (b < 0) b = dist3(position[std::size_t(v)], target);
+    if (b < 0) b = dist3(position[std::size_t(v)], target), scratch.bounded.push_back(v);
     return b;
   };
   d[src] = 0;
@@ -367,9 +368,13 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
       const int w = arcs[i].to * NL + next_sheet;
       const double nd = dv + arcs[i].len;
       if (nd < d[w]) {
+        // A node whose key reaches `below` lies on no loop shorter than that (the key is a lower bound of
+        // any loop through it): it is left out, and the nodes below it are taken in the same order.
+        const double key_w = nd + bound(arcs[i].to);
+        if (!(key_w < below)) continue;
         if (std::isinf(d[w])) touched.push_back(w);
         d[w] = nd, from[w] = node;
-        heap_push(q, {nd + bound(arcs[i].to), w});
+        heap_push(q, {key_w, w});
       }
     }
   }
@@ -387,7 +392,8 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
       std::rotate(path.begin(), path.end() - 1, path.end());
     }
   }
-  for (int w : touched) d[w] = std::numeric_limits<double>::infinity(), from[w] = -1, scratch.bound[std::size_t(w / NL)] = -1;
+  for (int w : touched) d[w] = std::numeric_limits<double>::infinity(), from[w] = -1;
+  for (int v : scratch.bounded) scratch.bound[std::size_t(v)] = -1;
   return path;
 }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "chokeloops/surface/mesh_adjacency.h"
@@ -92,7 +93,10 @@ struct Shortener {
   // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices, in the
   // input loop's direction. `backward`: search the loop the other way round (the same loops; the search
   // takes fewer nodes when the cut lies a short way ahead of s, see cut_is_near_ahead).
-  std::vector<int> shortest_loop_through(int s, double& length, bool backward = false) const;
+  // `below`: only a loop shorter than this is wanted (none found: empty, length infinite); the search then
+  // leaves out the nodes that cannot lie on one.
+  std::vector<int> shortest_loop_through(int s, double& length, bool backward = false,
+                                         double below = std::numeric_limits<double>::infinity()) const;
   // Whether, walking `loop` (mesh vertices, through band vertex s) on from s in its own direction, the
   // first crossing of the cut comes before half the loop's length.
   bool cut_is_near_ahead(const std::vector<int>& loop, int s) const;
