@@ -4,6 +4,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -148,6 +149,19 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
       }
     }
   });
+  A.closed_oriented = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, A.twin.size(), 1 << 16), true,
+      [&](const tbb::blocked_range<std::size_t>& r, bool ok) {
+        for (std::size_t h = r.begin(); ok && h < r.end(); ++h) {
+          const int t = A.twin[h];
+          const int from = mesh.faces[h / 3][h % 3], to = mesh.faces[h / 3][(h % 3 + 1) % 3];
+          const auto& f = mesh.faces[h / 3];
+          ok = t >= 0 && f[0] != f[1] && f[1] != f[2] && f[2] != f[0] && mesh.faces[std::size_t(t) / 3][std::size_t(t) % 3] == to &&
+               mesh.faces[std::size_t(t) / 3][(std::size_t(t) % 3 + 1) % 3] == from;
+        }
+        return ok;
+      },
+      [](bool a, bool b) { return a && b; });
   build_vertex_cells(mesh, A);
   return A;
 }

@@ -22,6 +22,10 @@ struct MeshAdjacency {
   std::array<long, 3> cell_dims{0, 0, 0};
   std::vector<int> cell_start, cell_vertex;
   double mean_edge = 0;
+  // Every edge has a twin running the other way (a closed, consistently oriented surface, as marching
+  // cubes gives): then v's neighbours are the vertices after it in its faces, each once, and
+  // for_each_neighbour reads no twins. build_adjacency sets it; false keeps the general path.
+  bool closed_oriented = false;
 
   static int face(int h) { return h / 3; }
   static int next(int h) { return h - h % 3 + (h % 3 + 1) % 3; }
@@ -99,6 +103,13 @@ int MeshAdjacency::nearest_vertex(const SurfaceMesh& m, const std::array<double,
 
 template <class Fn>
 void MeshAdjacency::for_each_neighbour(const SurfaceMesh& m, int v, Fn&& fn) const {
+  if (closed_oriented) {
+    for (int j = vf_start[std::size_t(v)]; j < vf_start[std::size_t(v) + 1]; ++j) {
+      const auto& t = m.faces[std::size_t(vf[std::size_t(j)])];
+      fn(t[0] == v ? t[1] : t[1] == v ? t[2] : t[0]);
+    }
+    return;
+  }
   for (int j = vf_start[std::size_t(v)]; j < vf_start[std::size_t(v) + 1]; ++j) {
     const int f = vf[std::size_t(j)];
     const auto& t = m.faces[std::size_t(f)];
