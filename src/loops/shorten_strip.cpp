@@ -455,6 +455,17 @@ std::vector<int> Shortener::other_fan(int v, int fa, int fb, int fa_next) const 
 }
 
 double Shortener::total_angle(int v) const {
+  const int l = local_of(v);
+  if (l >= 0) {
+    if (total_angle_of.size() != band.global.size()) total_angle_of.assign(band.global.size(), -1.0);
+    double& kept = total_angle_of[std::size_t(l)];
+    if (kept < 0) kept = sum_of_angles(v);
+    return kept;
+  }
+  return sum_of_angles(v);
+}
+
+double Shortener::sum_of_angles(int v) const {
   double a = 0;
   for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i) {
     auto& t = mesh.faces[adj.vf[i]];
@@ -465,6 +476,7 @@ double Shortener::total_angle(int v) const {
 }
 
 bool Shortener::interior_vertex(int v) const {
+  if (adj.closed_oriented) return true;  // every edge has its twin
   for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i)
     for (int k = 0; k < 3; ++k)
       if (adj.twin[3 * adj.vf[i] + k] < 0) return false;

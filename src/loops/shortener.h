@@ -153,7 +153,11 @@ struct Shortener {
 
   // Faces around v from f_a the other way round to f_b (f_a and f_b included), or empty.
   std::vector<int> other_fan(int v, int fa, int fb, int fa_next) const;
+  // The sum of v's face angles; a band vertex's is kept (the swap rounds ask for the same apexes' sums
+  // again and again, six arctangents each).
   double total_angle(int v) const;
+  mutable std::vector<double> total_angle_of;  // per band vertex, negative until asked; reset with the band
+  double sum_of_angles(int v) const;
   bool interior_vertex(int v) const;
 
   // Side swaps at every apex whose angle on the far side is below pi, for non-overlapping runs at once
