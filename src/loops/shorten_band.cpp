@@ -34,19 +34,36 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     }
   band = std::move(B);
   Band& b = band;
+  auto place = [&](int f) { const int* i = b.in_face.find(f); return i ? *i : -1; };
+  const std::size_t nh = 3 * b.faces.size();
+  b.corner.resize(nh);
+  b.twin_in_band.resize(nh);
+  b.crossing_sign.assign(nh, 0);
+  std::vector<int> across(nh);  // the band place of the face across each band half-edge, or -1
+  for (std::size_t i = 0; i < b.faces.size(); ++i) {
+    const int f = b.faces[i];
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t hl = 3 * i + std::size_t(k);
+      const int t = adj.twin[std::size_t(3 * f + k)];
+      b.corner[hl] = b.local.at(mesh.faces[std::size_t(f)][std::size_t(k)]);
+      across[hl] = t >= 0 ? place(t / 3) : -1;
+      b.twin_in_band[hl] = across[hl] >= 0 ? t : -1;
+    }
+  }
+  auto corner_to = [&](std::size_t hl) { return b.corner[hl - hl % 3 + (hl % 3 + 1) % 3]; };
   // Euler characteristic, boundary, fans.
   std::int64_t V = std::int64_t(b.global.size()), F = std::int64_t(b.faces.size()), E = 0;
   std::vector<int> faces_at(V, 0), interior_at(V, 0), boundary_at(V, 0);
   std::vector<int> bparent(V);
   std::iota(bparent.begin(), bparent.end(), 0);
   auto find = [&](int x) { while (bparent[x] != x) x = bparent[x] = bparent[bparent[x]]; return x; };
-  for (int f : b.faces)
+  for (std::size_t i = 0; i < b.faces.size(); ++i)
     for (int k = 0; k < 3; ++k) {
-      int h = 3 * f + k, t = adj.twin[h];
-      int a = b.local.at(vert(h)), c = b.local.at(vert_to(h));
+      const std::size_t hl = 3 * i + std::size_t(k);
+      const int h = 3 * b.faces[i] + k, t = b.twin_in_band[hl];
+      const int a = b.corner[hl], c = corner_to(hl);
       ++faces_at[a];
-      bool interior = t >= 0 && face_in(t / 3);
-      if (interior) {
+      if (t >= 0) {
         if (h < t) {
           ++E;
           ++interior_at[a], ++interior_at[c];
@@ -66,21 +83,18 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     if (boundary_at[v] && find(v) == v) ++boundary_components;
   }
   if (boundary_components != 2) return false;
-  // Connected (face flood).
-  // Band faces by their place in b.faces from here on: vectors, not maps.
-  auto place = [&](int f) { const int* i = b.in_face.find(f); return i ? *i : -1; };
+  // Connected (face flood over band places).
   {
-    std::vector<int> stack{b.faces[0]};
+    std::vector<int> stack{0};
     std::vector<char> seen(b.faces.size(), 0);
     seen[0] = 1;
     size_t reached = 1;
     while (!stack.empty()) {
-      int f = stack.back();
+      const int i = stack.back();
       stack.pop_back();
       for (int k = 0; k < 3; ++k) {
-        int t = adj.twin[3 * f + k];
-        const int i = t >= 0 ? place(t / 3) : -1;
-        if (i >= 0 && !seen[std::size_t(i)]) seen[std::size_t(i)] = 1, ++reached, stack.push_back(t / 3);
+        const int j = across[3 * std::size_t(i) + std::size_t(k)];
+        if (j >= 0 && !seen[std::size_t(j)]) seen[std::size_t(j)] = 1, ++reached, stack.push_back(j);
       }
     }
     if (reached != b.faces.size()) return false;
@@ -89,33 +103,31 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   int rootA = -1;
   for (int v = 0; v < V && rootA < 0; ++v)
     if (boundary_at[v]) rootA = find(v);
-  // Boundary half-edge of f on the given curve, or -1.
-  auto on_curve = [&](int f, bool curveA) {
+  // Boundary half-edge (mesh) of the face at band place i on the given curve, or -1.
+  auto on_curve = [&](int i, bool curveA) {
     for (int k = 0; k < 3; ++k) {
-      int h = 3 * f + k, t = adj.twin[h];
-      if (t >= 0 && face_in(t / 3)) continue;
-      bool isA = find(b.local.at(vert(h))) == rootA;
-      if (isA == curveA) return h;
+      const std::size_t hl = 3 * std::size_t(i) + std::size_t(k);
+      if (across[hl] >= 0) continue;
+      const bool isA = find(b.corner[hl]) == rootA;
+      if (isA == curveA) return 3 * b.faces[std::size_t(i)] + k;
     }
     return -1;
   };
   constexpr int kUnreached = -2;
   std::vector<int> parent_h(b.faces.size(), kUnreached);  // per band face: half-edge (in the parent face) crossed to reach it
-  auto parent_of = [&](int f) -> int& { return parent_h[std::size_t(place(f))]; };
   std::queue<int> q;
-  for (int f : b.faces)
-    if (on_curve(f, true) >= 0) parent_of(f) = -1, q.push(f);
+  for (std::size_t i = 0; i < b.faces.size(); ++i)
+    if (on_curve(int(i), true) >= 0) parent_h[i] = -1, q.push(int(i));
   int target = -1;
   while (!q.empty() && target < 0) {
-    int f = q.front();
+    const int i = q.front();
     q.pop();
-    if (on_curve(f, false) >= 0) { target = f; break; }
+    if (on_curve(i, false) >= 0) { target = i; break; }
     for (int k = 0; k < 3; ++k) {
-      int h = 3 * f + k, t = adj.twin[h];
-      const int i = t >= 0 ? place(t / 3) : -1;
-      if (i < 0 || parent_h[std::size_t(i)] != kUnreached) continue;
-      parent_h[std::size_t(i)] = h;
-      q.push(t / 3);
+      const int j = across[3 * std::size_t(i) + std::size_t(k)];
+      if (j < 0 || parent_h[std::size_t(j)] != kUnreached) continue;
+      parent_h[std::size_t(j)] = 3 * b.faces[std::size_t(i)] + k;
+      q.push(j);
     }
   }
   if (target < 0) return false;
@@ -124,16 +136,21 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   // the cut's end would otherwise wind once).
   auto set_sign = [&](int h, int sg) {
     b.sign[h] = sg;
-    if (adj.twin[h] >= 0) b.sign[adj.twin[h]] = -sg;
+    b.crossing_sign[3 * std::size_t(place(h / 3)) + std::size_t(h % 3)] = static_cast<signed char>(sg);
+    if (const int t = adj.twin[h]; t >= 0) {
+      b.sign[t] = -sg;
+      if (const int j = place(t / 3); j >= 0) b.crossing_sign[3 * std::size_t(j) + std::size_t(t % 3)] = static_cast<signed char>(-sg);
+    }
   };
   set_sign(on_curve(target, false), +1);
-  int f = target;
+  int i = target;
   b.cut_vertices.clear();
-  for (; parent_of(f) >= 0; f = parent_of(f) / 3) {
-    set_sign(parent_of(f), +1);
-    b.cut_vertices.push_back(b.local.at(vert(parent_of(f))));
+  for (; parent_h[std::size_t(i)] >= 0; i = place(parent_h[std::size_t(i)] / 3)) {
+    const int h = parent_h[std::size_t(i)];
+    set_sign(h, +1);
+    b.cut_vertices.push_back(b.local.at(vert(h)));
   }
-  set_sign(on_curve(f, true), -1);
+  set_sign(on_curve(i, true), -1);
   int w = 0;
   for (size_t i = 0; i < loop.size(); ++i) w += signed_edge_sign(loop[i], loop[(i + 1) % loop.size()]);
   b.winding = w;
@@ -220,19 +237,20 @@ void Shortener::build_arcs() {
   struct Half { int from; Arc arc; };
   std::vector<Half> all;
   all.reserve(band.faces.size() * 3 + 16);
-  for (int f : band.faces)
-    for (int k = 0; k < 3; ++k) {
-      const int h = 3 * f + k, t = adj.twin[std::size_t(h)];
-      if (t >= 0 && t < h && face_in(t / 3)) continue;
-      const int a = band.local.at(vert(h)), c = band.local.at(vert_to(h));
-      const double L = dist3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)]);
-      const int sg = hsign(h);
-      all.push_back({a, {L, c, sg}});
-      all.push_back({c, {L, a, -sg}});
-    }
   const std::size_t nv = band.global.size();
   position.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) position[v] = mesh.vertices[std::size_t(band.global[v])];
+  for (std::size_t i = 0; i < band.faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t hl = 3 * i + std::size_t(k);
+      const int h = 3 * band.faces[i] + k, t = band.twin_in_band[hl];
+      if (t >= 0 && t < h) continue;
+      const int a = band.corner[hl], c = band.corner[hl - hl % 3 + (hl % 3 + 1) % 3];
+      const double L = dist3(position[std::size_t(a)], position[std::size_t(c)]);
+      const int sg = band.crossing_sign[hl];
+      all.push_back({a, {L, c, sg}});
+      all.push_back({c, {L, a, -sg}});
+    }
   std::vector<int> fill(nv + 1, 0);
   for (const Half& x : all) ++fill[std::size_t(x.from) + 1];
   for (std::size_t v = 0; v < nv; ++v) fill[v + 1] += fill[v];

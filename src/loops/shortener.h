@@ -34,6 +34,11 @@ struct Band {
   detail::DenseIntMap local;        // mesh vertex -> band vertex
   std::vector<int> global;          // band vertex -> mesh vertex
   detail::FlatIntMap sign;          // cut crossing sign per mesh half-edge (the cut's few edges)
+  // Per band half-edge 3 * place + k (edge k -> k+1 of faces[place]): the band vertex at its source, the
+  // mesh half-edge across it when that one's face is in the band (else -1), and its cut crossing sign.
+  // Built once with the band, so that the band's own passes read small arrays, not mesh-sized maps.
+  std::vector<int> corner, twin_in_band;
+  std::vector<signed char> crossing_sign;
   int winding = 0;                  // of the input loop
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };
