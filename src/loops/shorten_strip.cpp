@@ -17,7 +17,19 @@ double len2(P2 a, P2 b) { return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.
 double triarea2(P2 a, P2 b, P2 c) { return (c.x - a.x) * (b.y - a.y) - (b.x - a.x) * (c.y - a.y); }
 bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
 // Portals from `from` on to `to` round a closed strip of m portals.
-int portals_ahead(int m, int from, int to) { return ((to - from) % m + m) % m; }
+int portals_ahead(int m, int from, int to) {
+  const int d = to - from;
+  if (d >= 0 && d < m) return d;
+  if (d < 0 && d >= -m) return d + m;
+  return (d % m + m) % m;
+}
+// x mod m for 0 <= x < 3m, without a division: the strip's loops take an index round the strip at every
+// portal, and `% m` with m known only at run time is a division (the swap rounds ~7% faster without them).
+int wrap(int x, int m) {
+  if (x >= m) x -= m;
+  if (x >= m) x -= m;
+  return x;
+}
 
 // A thread's funnel arrays, kept between calls: a shortening runs the funnel hundreds of times.
 struct FunnelScratch {
@@ -81,7 +93,7 @@ bool Shortener::strip_from_edge_loop(const std::vector<int>& P, std::vector<int>
 
 bool Shortener::portals_ok(const std::vector<int>& S) const {
   for (size_t j = 0; j < S.size(); ++j)
-    if (portal_of(S[j], S[(j + 1) % S.size()]) < 0) return false;
+    if (portal_of(S[j], S[j + 1 == S.size() ? 0 : j + 1]) < 0) return false;
   return true;
 }
 
@@ -106,13 +118,14 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
   auto& [L2, R2, Lv, Rv, pts, pidx, pside] = scratch;
   L2.resize(count + 1), R2.resize(count + 1), Lv.resize(count + 1), Rv.resize(count + 1);
   // Unfold: 2D coordinates of portal endpoints, in traversal order i = 0..count (portal from+i).
-  int h = portal_of(S[from], S[(from + 1) % m]);
+  int h = portal_of(S[std::size_t(from)], S[std::size_t(wrap(from + 1, m))]);
   Lv[0] = vert(h), Rv[0] = vert_to(h);
   L2[0] = {0, 0};
   R2[0] = {dist3(mesh.vertices[Lv[0]], mesh.vertices[Rv[0]]), 0};
   for (int i = 1; i <= count; ++i) {
     const int he = h;  // entry half-edge x->y inside the face S[from+i]
-    h = portal_of(S[(from + i) % m], S[(from + i + 1) % m]);  // exit portal: its endpoints are vertices of that face
+    const int at = wrap(from + i, m);
+    h = portal_of(S[std::size_t(at)], S[std::size_t(wrap(at + 1, m))]);  // exit portal: its endpoints are vertices of that face
     int x = vert(he), y = vert_to(he), z = vert(MeshAdjacency::prev(he));
     P2 X = L2[i - 1], Y = R2[i - 1];
     double dxy = len2(X, Y), dxz = dist3(mesh.vertices[x], mesh.vertices[z]), dyz = dist3(mesh.vertices[y], mesh.vertices[z]);
@@ -192,8 +205,8 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
   for (size_t k = 0; k + 1 < pts.size(); ++k) {
     if (pside[k] >= 0) {
       int i = pidx[k];
-      s[(from + i) % m] = pside[k] == 0 ? 0.0 : 1.0;
-      apexes.push_back({(from + i) % m, pside[k] == 0 ? Lv[i] : Rv[i]});
+      s[std::size_t(wrap(from + i, m))] = pside[k] == 0 ? 0.0 : 1.0;
+      apexes.push_back({wrap(from + i, m), pside[k] == 0 ? Lv[i] : Rv[i]});
     }
     P2 A = pts[k], B = pts[k + 1];
     for (int i = pidx[k] + 1; i < pidx[k + 1]; ++i) {
@@ -201,14 +214,14 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
       P2 d{B.x - A.x, B.y - A.y}, e{Rp.x - Lp.x, Rp.y - Lp.y};
       double den = e.x * d.y - e.y * d.x;
       double t = std::fabs(den) < 1e-300 ? 0.5 : ((A.x - Lp.x) * d.y - (A.y - Lp.y) * d.x) / den;
-      s[(from + i) % m] = std::min(1.0, std::max(0.0, t));
+      s[std::size_t(wrap(from + i, m))] = std::min(1.0, std::max(0.0, t));
     }
   }
 }
 
 P3 Shortener::crossing(const std::vector<int>& S, const std::vector<double>& s, int j) const {
   const int m = int(S.size());
-  int h = portal_of(S[j], S[(j + 1) % m]);
+  int h = portal_of(S[std::size_t(j)], S[std::size_t(wrap(j + 1, m))]);
   return lerp3(mesh.vertices[vert(h)], mesh.vertices[vert_to(h)], s[j]);
 }
 
@@ -227,7 +240,7 @@ double Shortener::params_length(const std::vector<int>& S, const std::vector<dou
 double Shortener::polish(const std::vector<int>& S, std::vector<double>& s, int sweeps) const {
   const int m = int(S.size());
   std::vector<int> ph(m);
-  for (int j = 0; j < m; ++j) ph[j] = portal_of(S[j], S[(j + 1) % m]);
+  for (int j = 0; j < m; ++j) ph[j] = portal_of(S[std::size_t(j)], S[std::size_t(wrap(j + 1, m))]);
   auto point = [&](int j) { return lerp3(mesh.vertices[vert(ph[j])], mesh.vertices[vert_to(ph[j])], s[j]); };
   double L = params_length(S, s);
   for (int it = 0; it < sweeps; ++it) {
@@ -492,18 +505,18 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
     int v = ap.vertex;
     if (!interior_vertex(v)) continue;
     // Run of strip faces containing v around portal ap.portal (between S[p] and S[p+1]).
-    int a = ap.portal, b = (ap.portal + 1) % m, len = 2;
-    while (len < m && contains(S[(a + m - 1) % m], v)) a = (a + m - 1) % m, ++len;
-    while (len < m && contains(S[(b + 1) % m], v)) b = (b + 1) % m, ++len;
+    int a = ap.portal, b = wrap(ap.portal + 1, m), len = 2;
+    while (len < m && contains(S[std::size_t(wrap(a + m - 1, m))], v)) a = wrap(a + m - 1, m), ++len;
+    while (len < m && contains(S[std::size_t(wrap(b + 1, m))], v)) b = wrap(b + 1, m), ++len;
     if (len >= m - 2) continue;
     int fa = S[a], fb = S[b];
     // Entry crossing (portal a-1, opposite v in fa) and exit crossing (portal b).
-    int hin = portal_of(S[(a + m - 1) % m], fa), hout = portal_of(fb, S[(b + 1) % m]);
+    int hin = portal_of(S[std::size_t(wrap(a + m - 1, m))], fa), hout = portal_of(fb, S[std::size_t(wrap(b + 1, m))]);
     if (hin < 0 || hout < 0) continue;
-    P3 qin = lerp3(mesh.vertices[vert(hin)], mesh.vertices[vert_to(hin)], s[(a + m - 1) % m]);
+    P3 qin = lerp3(mesh.vertices[vert(hin)], mesh.vertices[vert_to(hin)], s[std::size_t(wrap(a + m - 1, m))]);
     P3 qout = lerp3(mesh.vertices[vert(hout)], mesh.vertices[vert_to(hout)], s[b]);
     double run_angle = 0;
-    for (int i = 0, j = a; i < len; ++i, j = (j + 1) % m) {
+    for (int i = 0, j = a; i < len; ++i, j = wrap(j + 1, m)) {
       auto& t = mesh.faces[S[j]];
       int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
       run_angle += angle3(mesh.vertices[v], mesh.vertices[t[(k + 1) % 3]], mesh.vertices[t[(k + 2) % 3]]);
@@ -514,12 +527,12 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
         if (t[k] != v && !contains(neighbour, t[k])) return t[k];
       return -1;
     };
-    int ua = outer_vertex(fa, S[(a + 1) % m]), ub = outer_vertex(fb, S[(b + m - 1) % m]);
+    int ua = outer_vertex(fa, S[std::size_t(wrap(a + 1, m))]), ub = outer_vertex(fb, S[std::size_t(wrap(b + m - 1, m))]);
     if (ua < 0 || ub < 0) continue;
     double theta = run_angle - angle3(mesh.vertices[v], qin, mesh.vertices[ua]) - angle3(mesh.vertices[v], qout, mesh.vertices[ub]);
     double other = total_angle(v) - theta;
     if (!(other < M_PI - 1e-9)) continue;
-    auto run = other_fan(v, fa, fb, S[(a + 1) % m]);
+    auto run = other_fan(v, fa, fb, S[std::size_t(wrap(a + 1, m))]);
     if (run.size() < 2) continue;
     cands.push_back({other, a, len, run});
   }
@@ -535,11 +548,11 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
     auto& c = cands[ci];
     if (chosen >= limit) break;
     bool free = true;
-    for (int i = -1; i <= c.len && free; ++i) free = !used[(c.a + i + m) % m];
+    for (int i = -1; i <= c.len && free; ++i) free = !used[std::size_t(wrap(c.a + i + m, m))];
     if (!free) continue;
-    for (int i = -1; i <= c.len; ++i) used[(c.a + i + m) % m] = 1;
+    for (int i = -1; i <= c.len; ++i) used[std::size_t(wrap(c.a + i + m, m))] = 1;
     start_of[c.a] = int(ci);
-    if (first_end < 0) first_end = (c.a + c.len) % m;
+    if (first_end < 0) first_end = wrap(c.a + c.len, m);
     ++chosen;
   }
   if (!chosen) return 0;
@@ -549,13 +562,13 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
   std::vector<int> renumbered(m, -1);
   dirty.clear();
   for (int i = 0; i < m;) {
-    int j = (first_end + i) % m;
+    int j = wrap(first_end + i, m);
     if (start_of[j] >= 0) {
       auto& c = cands[start_of[j]];
       const int first = int(NS.size()) - 1;  // the old portal a-1, kept: a run never starts NS
       for (size_t k = 0; k < c.run.size(); ++k) NS.push_back(c.run[k]), Ns.push_back(0.5);
-      Ns.back() = s[(c.a + c.len - 1) % m];  // portal after fb is the old portal b
-      renumbered[(c.a + c.len - 1) % m] = int(NS.size()) - 1;
+      Ns.back() = s[std::size_t(wrap(c.a + c.len - 1, m))];  // portal after fb is the old portal b
+      renumbered[std::size_t(wrap(c.a + c.len - 1, m))] = int(NS.size()) - 1;
       dirty.push_back({first, int(NS.size()) - 1});
       i += c.len;
     } else {
