@@ -73,6 +73,19 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   for (size_t i = 0; i < region.size(); ++i) {
     const int v = region[i];
     if (ring[i] >= max_rings) continue;
+    // The BFS waits on the mesh's arrays (scattered over tens of megabytes): ask for what the vertices a few
+    // places ahead will read, their face lists two stages before their faces.
+    if (i + 8 < region.size()) {
+      const int ahead = region[i + 8];
+      __builtin_prefetch(&adj.vf_start[std::size_t(ahead)]);
+      __builtin_prefetch(&mesh.vertices[std::size_t(ahead)]);
+    }
+    if (i + 4 < region.size()) {
+      const int near = region[i + 4];
+      const int first = adj.vf_start[std::size_t(near)], last = adj.vf_start[std::size_t(near) + 1];
+      __builtin_prefetch(&adj.vf[std::size_t(first)]);
+      for (int j = first; j < last; ++j) __builtin_prefetch(&mesh.faces[std::size_t(adj.vf[std::size_t(j)])]);
+    }
     const auto& p = mesh.vertices[std::size_t(v)];
     // Unsorted (a sort per vertex was a fifth of this step).
     adj.for_each_neighbour(mesh, v, [&](int w) {
