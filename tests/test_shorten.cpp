@@ -2,6 +2,7 @@
 // thinnest section of a varying torus when allowed and stay put when not; the class is kept.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -508,4 +509,74 @@ TEST(Shorten, SearchEitherWayRoundGivesTheSameLoopLength) {
   EXPECT_GT(searched, 20);
   EXPECT_GT(near_ahead, 0);
   EXPECT_LT(near_ahead, searched);
+}
+
+// A descent asks a search only for a loop shorter than its best: asked below a loop's own length the search
+// finds nothing, asked a hair above it finds the same loop; and the nodes it leaves out must not leave their
+// straight-line bound to the next search (aimed elsewhere), whose loops must be those of fresh searches.
+TEST(Shorten, SearchForAShorterLoopOnlyFindsTheSameOneOrNone) {
+  const int rings = 6;
+  const MeridianOnTorus torus = wiggly_meridian_on_torus(48, rings);
+  const auto& [m, adj, loop, lr] = torus;
+  const auto& [rid, region, ring, near] = lr;
+  const auto c = shorten_detail::band_candidates(m, adj, region, rid, ring, near, rings);
+  shorten_detail::Shortener sh(m, adj);
+  ASSERT_TRUE(sh.build_band(c, rings, loop));
+  sh.build_arcs();
+  std::vector<std::vector<int>> fresh;
+  std::vector<double> fresh_length;
+  for (std::size_t v = 0; v < sh.band.global.size(); v += 25) {
+    double length = 0;
+    fresh.push_back(sh.shortest_loop_through(int(v), length));
+    fresh_length.push_back(length);
+    ASSERT_FALSE(fresh.back().empty());
+  }
+  std::size_t k = 0;
+  for (std::size_t v = 0; v < sh.band.global.size(); v += 25, ++k) {
+    double length = 0;
+    EXPECT_TRUE(sh.shortest_loop_through(int(v), length, false, fresh_length[k]).empty());
+    EXPECT_TRUE(std::isinf(length));
+    // A search from a neighbour u that leaves out every node but u (v among them): then v's own search must
+    // take the same nodes as a fresh one, which a bound of v's kept from u's search would change.
+    const int u = sh.arcs[std::size_t(sh.arc_start[v])].to;
+    EXPECT_TRUE(sh.shortest_loop_through(u, length, false, 1e-9).empty());
+    const long before = sh.search_nodes.load();
+    EXPECT_EQ(sh.shortest_loop_through(int(v), length, false, fresh_length[k] * (1 + 1e-9)), fresh[k]) << "band vertex " << v;
+    EXPECT_EQ(length, fresh_length[k]);
+    const long taken = sh.search_nodes.load() - before;
+    sh.shortest_loop_through(int(v), length);  // the unbounded search takes at least as many
+    EXPECT_GE(sh.search_nodes.load() - before - taken, taken) << "band vertex " << v;
+  }
+  EXPECT_GT(k, 20u);
+}
+
+// On a closed, consistently oriented surface the neighbours come from each face's next vertex alone, each
+// once; a flipped face or a hole turns that off, and either way a vertex's neighbours are its faces' corners.
+TEST(Shorten, NeighboursOfAClosedOrientedSurfaceAndOfOneThatIsNot) {
+  SurfaceMesh closed = extract_zero_surface(sample_field({32, 32, 32}, analytic::torus(0.3, 0.1)));
+  SurfaceMesh flipped = closed, holed = closed;
+  std::swap(flipped.faces[100][1], flipped.faces[100][2]);
+  holed.faces.erase(holed.faces.begin() + 100);
+  const SurfaceMesh* meshes[] = {&closed, &flipped, &holed};
+  for (int which = 0; which < 3; ++which) {
+    const SurfaceMesh& m = *meshes[which];
+    const MeshAdjacency adj = build_adjacency(m);
+    EXPECT_EQ(adj.closed_oriented, which == 0) << "mesh " << which;
+    std::vector<std::vector<int>> expected(m.vertices.size());  // the other two corners of each face at v
+    for (const auto& f : m.faces)
+      for (int k = 0; k < 3; ++k)
+        for (int j = 1; j < 3; ++j) expected[std::size_t(f[std::size_t(k)])].push_back(f[std::size_t((k + j) % 3)]);
+    for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+      std::vector<int> got;
+      adj.for_each_neighbour(m, int(v), [&](int w) { got.push_back(w); });
+      std::sort(got.begin(), got.end());
+      // Once each on the closed oriented surface; elsewhere one may come twice (as the header says).
+      if (which == 0) ASSERT_EQ(std::adjacent_find(got.begin(), got.end()), got.end()) << "vertex " << v << " twice";
+      got.erase(std::unique(got.begin(), got.end()), got.end());
+      auto& want = expected[v];
+      std::sort(want.begin(), want.end());
+      want.erase(std::unique(want.begin(), want.end()), want.end());
+      ASSERT_EQ(got, want) << "mesh " << which << " vertex " << v;
+    }
+  }
 }
