@@ -104,6 +104,18 @@ MeridianOnTorus wiggly_meridian_on_torus(int n, int max_k) {
   t.region = loop_region(t.m, t.adj, t.loop, max_k);
   return t;
 }
+// That meridian's band of `rings` rings with its arcs, ready for searches (`built`: the band is an annulus).
+struct MeridianBand {
+  MeridianOnTorus torus;
+  shorten_detail::Shortener sh;
+  bool built = false;
+  MeridianBand(int n, int rings) : torus(wiggly_meridian_on_torus(n, rings)), sh(torus.m, torus.adj) {
+    const auto& [rid, region, ring, near] = torus.region;
+    const auto candidates = shorten_detail::band_candidates(torus.m, torus.adj, region, rid, ring, near, rings);
+    built = sh.build_band(candidates, rings, torus.loop);
+    if (built) sh.build_arcs();
+  }
+};
 }  // namespace
 
 TEST(Shorten, WigglyMeridianBecomesGeodesicMeridian) {
@@ -457,14 +469,10 @@ TEST(Shorten, FunnelRedoneInWindowsOrThroughAnApexEqualsTheFunnelOverTheWholeStr
 // there, joined by mesh edges, winding as the input loop does across the cut; and the choice follows where
 // the cut lies on the loop. A wiggly meridian of a torus, from every twentieth vertex of its band.
 TEST(Shorten, SearchEitherWayRoundGivesTheSameLoopLength) {
-  const int rings = 6;
-  const MeridianOnTorus torus = wiggly_meridian_on_torus(48, rings);
-  const auto& [m, adj, loop, lr] = torus;
-  const auto& [rid, region, ring, near] = lr;
-  const auto c = shorten_detail::band_candidates(m, adj, region, rid, ring, near, rings);
-  shorten_detail::Shortener sh(m, adj);
-  ASSERT_TRUE(sh.build_band(c, rings, loop));
-  sh.build_arcs();
+  MeridianBand band(48, 6);
+  ASSERT_TRUE(band.built);
+  const auto& [m, adj, loop, lr] = band.torus;
+  auto& sh = band.sh;
   int searched = 0, near_ahead = 0;
   for (std::size_t v = 0; v < sh.band.global.size(); v += 20) {
     double forward_length = 0, backward_length = 0;
@@ -513,16 +521,11 @@ TEST(Shorten, SearchEitherWayRoundGivesTheSameLoopLength) {
 
 // A descent asks a search only for a loop shorter than its best: asked below a loop's own length the search
 // finds nothing, asked a hair above it finds the same loop; and the nodes it leaves out must not leave their
-// straight-line bound to the next search (aimed elsewhere), whose loops must be those of fresh searches.
+// straight-line bound to the next search (aimed elsewhere), which must take the nodes a fresh one takes.
 TEST(Shorten, SearchForAShorterLoopOnlyFindsTheSameOneOrNone) {
-  const int rings = 6;
-  const MeridianOnTorus torus = wiggly_meridian_on_torus(48, rings);
-  const auto& [m, adj, loop, lr] = torus;
-  const auto& [rid, region, ring, near] = lr;
-  const auto c = shorten_detail::band_candidates(m, adj, region, rid, ring, near, rings);
-  shorten_detail::Shortener sh(m, adj);
-  ASSERT_TRUE(sh.build_band(c, rings, loop));
-  sh.build_arcs();
+  MeridianBand band(48, 6);
+  ASSERT_TRUE(band.built);
+  auto& sh = band.sh;
   std::vector<std::vector<int>> fresh;
   std::vector<double> fresh_length;
   for (std::size_t v = 0; v < sh.band.global.size(); v += 25) {
