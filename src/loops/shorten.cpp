@@ -208,8 +208,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   for (int it = 0; it < 16 && s >= 0; ++it) {
     double L;
     ++descents;
-    auto P = sh.shortest_loop_through(s, L, !best.empty() && sh.cut_is_near_ahead(best, s), best_len - 1e-12);
-    if (P.empty() || !(L < best_len - 1e-12)) break;
+    const double wanted = best_len - 1e-12;  // a descent only takes a shorter loop; the search knows it
+    auto P = sh.shortest_loop_through(s, L, !best.empty() && sh.cut_is_near_ahead(best, s), wanted);
+    if (P.empty() || !(L < wanted)) break;
     best = P, best_len = L;
     double acc = 0;  // next start: the vertex at half the length
     int mid = best[0];

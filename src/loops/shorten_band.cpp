@@ -50,7 +50,6 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
       b.twin_in_band[hl] = across[hl] >= 0 ? t : -1;
     }
   }
-  auto corner_to = [&](std::size_t hl) { return b.corner[hl - hl % 3 + (hl % 3 + 1) % 3]; };
   // Euler characteristic, boundary, fans.
   std::int64_t V = std::int64_t(b.global.size()), F = std::int64_t(b.faces.size()), E = 0;
   std::vector<int> faces_at(V, 0), interior_at(V, 0), boundary_at(V, 0);
@@ -61,7 +60,7 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     for (int k = 0; k < 3; ++k) {
       const std::size_t hl = 3 * i + std::size_t(k);
       const int h = 3 * b.faces[i] + k, t = b.twin_in_band[hl];
-      const int a = b.corner[hl], c = corner_to(hl);
+      const int a = b.corner[hl], c = b.corner_to(hl);
       ++faces_at[a];
       if (t >= 0) {
         if (h < t) {
@@ -245,7 +244,7 @@ void Shortener::build_arcs() {
       const std::size_t hl = 3 * i + std::size_t(k);
       const int h = 3 * band.faces[i] + k, t = band.twin_in_band[hl];
       if (t >= 0 && t < h) continue;
-      const int a = band.corner[hl], c = band.corner[hl - hl % 3 + (hl % 3 + 1) % 3];
+      const int a = band.corner[hl], c = band.corner_to(hl);
       const double L = dist3(position[std::size_t(a)], position[std::size_t(c)]);
       const int sg = band.crossing_sign[hl];
       all.push_back({a, {L, c, sg}});

@@ -39,6 +39,7 @@ struct Band {
   // Built once with the band, so that the band's own passes read small arrays, not mesh-sized maps.
   std::vector<int> corner, twin_in_band;
   std::vector<signed char> crossing_sign;
+  int corner_to(std::size_t hl) const { return corner[std::size_t(MeshAdjacency::next(int(hl)))]; }  // its target
   int winding = 0;                  // of the input loop
   std::vector<int> cut_vertices;    // band vertices at one end of each crossed edge, along the cut
 };

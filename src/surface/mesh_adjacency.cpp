@@ -154,10 +154,11 @@ MeshAdjacency build_adjacency(const SurfaceMesh& mesh) {
       [&](const tbb::blocked_range<std::size_t>& r, bool ok) {
         for (std::size_t h = r.begin(); ok && h < r.end(); ++h) {
           const int t = A.twin[h];
-          const int from = mesh.faces[h / 3][h % 3], to = mesh.faces[h / 3][(h % 3 + 1) % 3];
           const auto& f = mesh.faces[h / 3];
-          ok = t >= 0 && f[0] != f[1] && f[1] != f[2] && f[2] != f[0] && mesh.faces[std::size_t(t) / 3][std::size_t(t) % 3] == to &&
-               mesh.faces[std::size_t(t) / 3][(std::size_t(t) % 3 + 1) % 3] == from;
+          if (t < 0 || f[0] == f[1] || f[1] == f[2] || f[2] == f[0]) { ok = false; break; }
+          const auto& g = mesh.faces[std::size_t(t) / 3];
+          const std::size_t k = h % 3, kt = std::size_t(t) % 3;
+          ok = g[kt] == f[(k + 1) % 3] && g[(kt + 1) % 3] == f[k];  // the twin runs to -> from
         }
         return ok;
       },
