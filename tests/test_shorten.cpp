@@ -428,6 +428,8 @@ TEST(Shorten, FunnelRedoneInWindowsOrThroughAnApexEqualsTheFunnelOverTheWholeStr
     std::vector<shorten_detail::Shortener::Apex> kept, whole_apexes;
     std::vector<std::array<int, 2>> dirty;
     if (!sh.swap_batch(S2, s2, apexes, 1 << 30, kept, dirty)) break;
+    // swap_batch checks only the portals of its new runs: the strip must still be whole.
+    ASSERT_TRUE(sh.portals_ok(S2)) << "round " << rounds;
     std::vector<double> whole = s2, through_apex = s2;
     std::vector<shorten_detail::Shortener::Apex> apex_kept = kept;
     const double L_whole = sh.relax(S2, 0, whole, whole_apexes);
