@@ -18,6 +18,7 @@ namespace chokeloops::shorten_detail {
 bool Shortener::build_band(const BandCandidates& candidates, int rings, const std::vector<int>& loop) {
   band = Band();  // its arrays back to the pool first: a call holds one band's at a time
   total_angle_of.clear();
+  corner_angle_of.clear();
   Band B;
   B.in_face = detail::DenseIntMap(mesh.faces.size());
   B.local = detail::DenseIntMap(mesh.vertices.size());

@@ -157,8 +157,13 @@ struct Shortener {
                              const std::vector<std::array<int, 2>>& dirty);
   int apex_funnels = 0, apex_funnels_relaxed = 0;  // how funnel_through_apex went, for the trace and tests
 
-  // Faces around v from f_a the other way round to f_b (f_a and f_b included), or empty.
-  std::vector<int> other_fan(int v, int fa, int fb, int fa_next) const;
+  // Faces around v from f_a the other way round to f_b (f_a and f_b included), appended to `run`; false
+  // (and `run` as it was) when there is no such fan in the band.
+  bool other_fan(int v, int fa, int fb, int fa_next, std::vector<int>& run) const;
+  // The angle of band face f at its corner v; kept once computed, as total_angle is (the swap rounds measure
+  // the same apexes' runs again and again, an arctangent each).
+  double corner_angle(int f, int v) const;
+  mutable std::vector<double> corner_angle_of;  // per band face corner, negative until asked; reset with the band
   // The sum of v's face angles; a band vertex's is kept (the swap rounds ask for the same apexes' sums
   // again and again, six arctangents each).
   double total_angle(int v) const;
