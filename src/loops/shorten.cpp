@@ -256,17 +256,21 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   constexpr int kProgressWindow = 8;
   constexpr double kMinProgress = 1e-5;  // of the length, over the window
   std::vector<double> round_length{L};
+  // A round's trial strip lives in buffers kept across rounds (an accepted round swaps them with the strip's).
+  std::vector<int> S2;
+  std::vector<double> s2;
+  std::vector<Shortener::Apex> ap2;
+  std::vector<std::array<int, 2>> dirty;
   for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
-    std::vector<int> S2 = S;
-    std::vector<double> s2 = sp;
-    std::vector<Shortener::Apex> ap2;
-    std::vector<std::array<int, 2>> dirty;
+    S2.assign(S.begin(), S.end());
+    s2.assign(sp.begin(), sp.end());
     int n = sh.swap_batch(S2, s2, apexes, 1 << 30, ap2, dirty);
     if (!n) break;
     // Only the funnel between the apexes around each swap is run again (a round costs what it changes).
     double L2 = sh.refunnel(S2, s2, ap2, dirty);
     if (!(L2 < L - 1e-12 * L) && n > 1) {  // the batch did not help: the single best swap alone
-      S2 = S, s2 = sp;
+      S2.assign(S.begin(), S.end());
+      s2.assign(sp.begin(), sp.end());
       n = sh.swap_batch(S2, s2, apexes, 1, ap2, dirty);
       if (!n) break;
       L2 = sh.refunnel(S2, s2, ap2, dirty);

@@ -318,12 +318,12 @@ double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<dou
   if (cut < 0)
     for (int p = 0; p < m; ++p)
       if (const int c = clearance(p); c > best) best = c, cut = p;
-  std::vector<double> held;
-  std::vector<Apex> found;
+  thread_local std::vector<double> held;  // kept by the thread: a loop's rounds hold a funnel hundreds of times
+  thread_local std::vector<Apex> found;
   double length = 0;
   // One funnel cut at `portal`, held at `vertex` (or, with -1, at the crossing it has); true when optimal.
   auto try_cut = [&](int portal, int at_vertex) {
-    held = s;
+    held.assign(s.begin(), s.end());
     const int h = portal_of(S[std::size_t(portal)], S[std::size_t(portal + 1) % std::size_t(m)]);
     if (at_vertex >= 0) {
       if (at_vertex != vert(h) && at_vertex != vert_to(h)) return false;
@@ -370,7 +370,7 @@ double Shortener::funnel_through_apex(const std::vector<int>& S, std::vector<dou
 double Shortener::refunnel(const std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes,
                            const std::vector<std::array<int, 2>>& dirty) {
   const int m = int(S.size());
-  std::vector<Apex> found, merged;
+  thread_local std::vector<Apex> found, merged;  // kept by the thread, as the funnel's own arrays
   std::vector<char> pending(dirty.size(), 1);
   auto forward = [m](int from, int to) { return portals_ahead(m, from, to); };
   for (std::size_t r = 0; r < dirty.size(); ++r) {
