@@ -68,6 +68,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   // the tree's path alone half the cage's handle loops ran the Dijkstra for the band and the rest for the
   // band-edge test, 7% of their time.
   std::vector<double> upper;
+  // A band of k rings round a loop of n vertices holds about (2k + 1) n of them: grown once, not a dozen times.
+  const std::size_t expected = loop.size() * std::size_t(2 * max_rings + 2);
+  region.reserve(expected), ring.reserve(expected), upper.reserve(expected);
   for (int v : loop)
     if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0), upper.push_back(0);
   for (size_t i = 0; i < region.size(); ++i) {

@@ -40,7 +40,9 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   b.corner.resize(nh);
   b.twin_in_band.resize(nh);
   b.crossing_sign.assign(nh, 0);
-  std::vector<int> across(nh);  // the band place of the face across each band half-edge, or -1
+  // This step's tables are the thread's, kept between calls (a loop stage builds a band per loop).
+  thread_local std::vector<int> across;  // the band place of the face across each band half-edge, or -1
+  across.resize(nh);
   for (std::size_t i = 0; i < b.faces.size(); ++i) {
     const int f = b.faces[i];
     for (int k = 0; k < 3; ++k) {
@@ -53,8 +55,9 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   }
   // Euler characteristic, boundary, fans.
   std::int64_t V = std::int64_t(b.global.size()), F = std::int64_t(b.faces.size()), E = 0;
-  std::vector<int> faces_at(V, 0), interior_at(V, 0), boundary_at(V, 0);
-  std::vector<int> bparent(V);
+  thread_local std::vector<int> faces_at, interior_at, boundary_at, bparent;
+  faces_at.assign(std::size_t(V), 0), interior_at.assign(std::size_t(V), 0), boundary_at.assign(std::size_t(V), 0);
+  bparent.resize(std::size_t(V));
   std::iota(bparent.begin(), bparent.end(), 0);
   auto find = [&](int x) { while (bparent[x] != x) x = bparent[x] = bparent[bparent[x]]; return x; };
   for (std::size_t i = 0; i < b.faces.size(); ++i)
@@ -86,7 +89,8 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
   // Connected (face flood over band places).
   {
     std::vector<int> stack{0};
-    std::vector<char> seen(b.faces.size(), 0);
+    thread_local std::vector<char> seen;
+    seen.assign(b.faces.size(), 0);
     seen[0] = 1;
     size_t reached = 1;
     while (!stack.empty()) {
@@ -114,7 +118,8 @@ bool Shortener::build_band(const BandCandidates& candidates, int rings, const st
     return -1;
   };
   constexpr int kUnreached = -2;
-  std::vector<int> parent_h(b.faces.size(), kUnreached);  // per band face: half-edge (in the parent face) crossed to reach it
+  thread_local std::vector<int> parent_h;
+  parent_h.assign(b.faces.size(), kUnreached);  // per band face: half-edge (in the parent face) crossed to reach it
   std::queue<int> q;
   for (std::size_t i = 0; i < b.faces.size(); ++i)
     if (on_curve(int(i), true) >= 0) parent_h[i] = -1, q.push(int(i));
@@ -207,7 +212,8 @@ BandCandidates band_candidates(const SurfaceMesh& mesh, const MeshAdjacency& adj
   c.entry.reserve(taken.size());
   for (const auto& [f, k] : taken) c.faces.push_back(f), c.entry.push_back(k);
   std::vector<long> delta(std::size_t(max_k) + 2, 0);
-  std::vector<int> vertex_k(region.size(), never);
+  thread_local std::vector<int> vertex_k;  // kept by the thread, as the band's tables
+  vertex_k.assign(region.size(), never);
   for (std::size_t i = 0; i < c.faces.size(); ++i) {
     const int f = c.faces[i], k = c.entry[i];
     ++delta[std::size_t(k)];
@@ -235,7 +241,8 @@ void Shortener::build_arcs() {
   // comes first), bucketed by their source vertex, then each vertex's few arcs by (target, sign) with
   // repeats (edges of more than two faces) dropped: the arcs a sort of all of them gave, for a counting pass.
   struct Half { int from; Arc arc; };
-  std::vector<Half> all;
+  thread_local std::vector<Half> all;  // this step's tables are the thread's, kept between calls
+  all.clear();
   all.reserve(band.faces.size() * 3 + 16);
   const std::size_t nv = band.global.size();
   position.resize(nv);
@@ -251,12 +258,15 @@ void Shortener::build_arcs() {
       all.push_back({a, {L, c, sg}});
       all.push_back({c, {L, a, -sg}});
     }
-  std::vector<int> fill(nv + 1, 0);
+  thread_local std::vector<int> fill;
+  fill.assign(nv + 1, 0);
   for (const Half& x : all) ++fill[std::size_t(x.from) + 1];
   for (std::size_t v = 0; v < nv; ++v) fill[v + 1] += fill[v];
-  std::vector<Arc> bucketed(all.size());
+  thread_local std::vector<Arc> bucketed;
+  bucketed.resize(all.size());
   {
-    std::vector<int> next(fill.begin(), fill.end() - 1);
+    thread_local std::vector<int> next;
+    next.assign(fill.begin(), fill.end() - 1);
     for (const Half& x : all) bucketed[std::size_t(next[std::size_t(x.from)]++)] = x.arc;
   }
   auto before = [](const Arc& x, const Arc& y) { return x.to != y.to ? x.to < y.to : x.sign < y.sign; };
