@@ -91,9 +91,16 @@ bool Shortener::strip_from_edge_loop(const std::vector<int>& P, std::vector<int>
   return S.size() >= 2 && portals_ok(S);
 }
 
-bool Shortener::portals_ok(const std::vector<int>& S) const {
-  for (size_t j = 0; j < S.size(); ++j)
-    if (portal_of(S[j], S[j + 1 == S.size() ? 0 : j + 1]) < 0) return false;
+bool Shortener::portals_ok(const std::vector<int>& S, const std::vector<std::array<int, 2>>* ranges) const {
+  auto ok = [&](std::size_t j) { return portal_of(S[j], S[j + 1 == S.size() ? 0 : j + 1]) >= 0; };
+  if (!ranges) {
+    for (std::size_t j = 0; j < S.size(); ++j)
+      if (!ok(j)) return false;
+    return true;
+  }
+  for (const auto& range : *ranges)
+    for (std::size_t j = std::size_t(range[0]); j <= std::size_t(range[1]); ++j)
+      if (!ok(j)) return false;
   return true;
 }
 
@@ -476,15 +483,11 @@ bool Shortener::other_fan(int v, int fa, int fb, int fa_next, std::vector<int>& 
 }
 
 double Shortener::corner_angle(int f, int v) const {
-  const auto& t = mesh.faces[std::size_t(f)];
-  const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-  auto angle = [&] { return angle3(mesh.vertices[v], mesh.vertices[t[(k + 1) % 3]], mesh.vertices[t[(k + 2) % 3]]); };
-  const int* place_of = band.in_face.find(f);
-  if (!place_of) return angle();
-  const int place = *place_of;
+  const int* place = band.in_face.find(f);
+  if (!place) return angle_at_corner(mesh, f, v);
   if (corner_angle_of.size() != 3 * band.faces.size()) corner_angle_of.assign(3 * band.faces.size(), -1.0);
-  double& kept = corner_angle_of[3 * std::size_t(place) + std::size_t(k)];
-  if (kept < 0) kept = angle();
+  double& kept = corner_angle_of[3 * std::size_t(*place) + std::size_t(corner_of(mesh, f, v))];
+  if (kept < 0) kept = angle_at_corner(mesh, f, v);
   return kept;
 }
 
@@ -501,11 +504,7 @@ double Shortener::total_angle(int v) const {
 
 double Shortener::sum_of_angles(int v) const {
   double a = 0;
-  for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i) {
-    auto& t = mesh.faces[adj.vf[i]];
-    int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-    a += angle3(mesh.vertices[v], mesh.vertices[t[(k + 1) % 3]], mesh.vertices[t[(k + 2) % 3]]);
-  }
+  for (int i = adj.vf_start[v]; i < adj.vf_start[v + 1]; ++i) a += angle_at_corner(mesh, adj.vf[i], v);
   return a;
 }
 
@@ -558,10 +557,6 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
     if (!(other < M_PI - 1e-9)) continue;
     const std::size_t run_at = runs.size();
     if (!other_fan(v, fa, fb, S[std::size_t(wrap(a + 1, m))], runs)) continue;
-    if (runs.size() - run_at < 2) {
-      runs.resize(run_at);
-      continue;
-    }
     cands.push_back({other, a, len, run_at, runs.size() - run_at});
   }
   std::stable_sort(cands.begin(), cands.end(), [](const Cand& x, const Cand& y) { return x.other < y.other; });
@@ -607,9 +602,7 @@ int Shortener::swap_batch(std::vector<int>& S, std::vector<double>& s, const std
   }
   // The strip was whole before (strip_from_edge_loop and every batch check it): only the portals into, through
   // and out of the new runs can fail (on a loop of 4000 faces a check of the whole strip cost a funnel's tenth).
-  for (const auto& range : dirty)
-    for (std::size_t j = std::size_t(range[0]); j <= std::size_t(range[1]); ++j)
-      if (portal_of(NS[j], NS[j + 1 == NS.size() ? 0 : j + 1]) < 0) return 0;
+  if (!portals_ok(NS, &dirty)) return 0;
   kept.clear();
   for (const Apex& ap : apexes)
     if (renumbered[ap.portal] >= 0) kept.push_back({renumbered[ap.portal], ap.vertex});

@@ -26,6 +26,18 @@ inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v bet
   double cn = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   return std::atan2(cn, u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
 }
+// The index of v among face f's corners (2 when v is not the first or second).
+inline int corner_of(const SurfaceMesh& mesh, int f, int v) {
+  const auto& t = mesh.faces[std::size_t(f)];
+  return t[0] == v ? 0 : t[1] == v ? 1 : 2;
+}
+// The angle of face f at its corner v.
+inline double angle_at_corner(const SurfaceMesh& mesh, int f, int v) {
+  const auto& t = mesh.faces[std::size_t(f)];
+  const int k = corner_of(mesh, f, v);
+  return angle3(mesh.vertices[std::size_t(v)], mesh.vertices[std::size_t(t[std::size_t((k + 1) % 3)])],
+                mesh.vertices[std::size_t(t[std::size_t((k + 2) % 3)])]);
+}
 
 // Everything about the annulus band around the loop.
 struct Band {
@@ -115,7 +127,9 @@ struct Shortener {
   bool fan(int a, int p, int b, bool left, std::vector<int>& out, double& angle) const;
   bool strip_from_edge_loop(const std::vector<int>& P, std::vector<int>& S) const;
   // Portal j: half-edge (in S[j+1]) whose twin lies in S[j]; left = its source, right = its target.
-  bool portals_ok(const std::vector<int>& S) const;
+  // True when every consecutive pair of S (round the strip) shares a portal; with `ranges`, only the
+  // portals j in each [first, last] (a strip known whole but for the runs a swap batch put in).
+  bool portals_ok(const std::vector<int>& S, const std::vector<std::array<int, 2>>* ranges = nullptr) const;
   int portal_of(int f, int g) const;
 
   // Funnel through the strip cut at portal c with the loop crossing it at parameter s_c. Fills s (per
@@ -157,8 +171,8 @@ struct Shortener {
                              const std::vector<std::array<int, 2>>& dirty);
   int apex_funnels = 0, apex_funnels_relaxed = 0;  // how funnel_through_apex went, for the trace and tests
 
-  // Faces around v from f_a the other way round to f_b (f_a and f_b included), appended to `run`; false
-  // (and `run` as it was) when there is no such fan in the band.
+  // Faces around v from f_a the other way round to f_b (f_a and f_b included, so at least two), appended to
+  // `run`; false (and `run` as it was) when there is no such fan in the band.
   bool other_fan(int v, int fa, int fb, int fa_next, std::vector<int>& run) const;
   // The angle of band face f at its corner v; kept once computed, as total_angle is (the swap rounds measure
   // the same apexes' runs again and again, an arctangent each).
