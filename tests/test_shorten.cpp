@@ -224,6 +224,67 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
   EXPECT_NEAR(settled.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
 }
 
+// Step 3 starts from the band's shortest plane section near the edge loop's plane: the edge loop that step 2
+// finds a few edges from a tube's neck reaches it in a few swap rounds instead of one vertex row per round.
+TEST(Shorten, PlaneSectionsStartTheSwapsAtTheNeck) {
+  const int n = 128;
+  auto g = sample_field({n, n, n}, analytic::varying_torus(), {-0.3, -0.3, -0.3}, {1.3, 1.3, 1.3});
+  auto m = extract_zero_surface(g);
+  auto adj = build_adjacency(m);
+  const double t0 = M_PI - 0.12;  // 0.06 from the neck along the core circle: inside a 12-ring band
+  auto start = snap_polyline_to_edge_path(m, wiggly_meridian({0.5, 0.5, 0.5}, 0.5, 0.15 + 0.06 * std::cos(t0), t0, 0.0, 1));
+  ShortenOptions o{0, 12, 5000};
+  o.cut_samples = 0;  // as the loop tracer runs it: the edge loop stays near its start
+  const ShortenResult with = shorten_loop(m, adj, start, o);
+  o.plane_sections = false;
+  const ShortenResult without = shorten_loop(m, adj, start, o);
+  auto angle = [](const Polyline3& p) {
+    const double a = mean_angle(p, {0.5, 0.5, 0.5});
+    return a < 0 ? a + 2 * M_PI : a;
+  };
+  std::printf("neck from %.3f: with sections %.6f at %.4f (%d swaps), without %.6f at %.4f (%d swaps)\n", t0, with.length,
+              angle(with.points), with.swaps, without.length, angle(without.points), without.swaps);
+  ASSERT_GT(with.rings, 0);
+  EXPECT_EQ(with.edge_path, without.edge_path);  // steps 1 and 2 are the same
+  EXPECT_NEAR(angle(with.points), M_PI, 2 * g.voxel_size / 0.5);
+  EXPECT_NEAR(angle(without.points), M_PI, 2 * g.voxel_size / 0.5);
+  EXPECT_LE(with.length, without.length * (1 + 1e-5));
+  EXPECT_LT(2 * with.swaps, without.swaps);
+  EXPECT_NEAR(closed_length(with.points), with.length, 1e-9);
+  EXPECT_LT(max_distance_to_vertices_edges(m, with.points), 1e-9);
+  SurfaceTopology topo(m);
+  EXPECT_FALSE(topo.contractible(snap_polyline_to_edge_path(m, adj, with.points)));
+}
+
+// The band's sections: the meridian plane of the wiggly meridian's band cuts it in one closed section round
+// the tube that winds like the loop (and like the strip of the loop's own edges); a plane square to it
+// cuts the band only across, in arcs that leave it.
+TEST(Shorten, PlaneSectionOfTheBandWindsLikeTheLoop) {
+  MeridianBand b(96, 12);
+  ASSERT_TRUE(b.built);
+  auto& sh = b.sh;
+  std::vector<int> edge_strip;
+  ASSERT_TRUE(sh.strip_from_edge_loop(b.torus.loop, edge_strip));
+  EXPECT_EQ(sh.strip_winding(edge_strip), sh.band.winding);
+  std::vector<int> reversed(edge_strip.rbegin(), edge_strip.rend());
+  EXPECT_EQ(sh.strip_winding(reversed), -sh.band.winding);
+  const double phi = 0.4;  // the meridian's plane, through the torus's axis
+  std::vector<int> S;
+  const double length = sh.shortest_plane_section({0.5, 0.5, 0.5}, {-std::sin(phi), std::cos(phi), 0}, S);
+  std::printf("meridian plane section: %.6f (2 pi r %.6f), %zu faces\n", length, 2 * M_PI * 0.1, S.size());
+  ASSERT_FALSE(S.empty());
+  EXPECT_NEAR(length, 2 * M_PI * 0.1, 0.01 * 2 * M_PI * 0.1);
+  EXPECT_TRUE(sh.portals_ok(S));
+  EXPECT_EQ(sh.strip_winding(S), sh.band.winding);
+  for (int f : S) EXPECT_TRUE(sh.face_in(f));
+  std::vector<int> S2;
+  EXPECT_FALSE(std::isfinite(sh.shortest_plane_section({0.5 + 0.3 * std::cos(phi), 0.5 + 0.3 * std::sin(phi), 0.5},
+                                                        {std::cos(phi), std::sin(phi), 0}, S2)));
+  EXPECT_TRUE(S2.empty());
+  // Far from the band no plane cuts it at all.
+  EXPECT_FALSE(std::isfinite(sh.shortest_plane_section({0.5, 0.5, 0.5}, {-std::sin(phi + 1.5), std::cos(phi + 1.5), 0}, S2)));
+}
+
 TEST(Shorten, DoubleTorusHandleMeridianStaysEssential) {
   auto m = extract_zero_surface(sample_field({128, 128, 128}, analytic::double_torus()));
   auto adj = build_adjacency(m);

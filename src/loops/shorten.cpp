@@ -23,6 +23,10 @@ using shorten_detail::dist3;
 using shorten_detail::Shortener;
 
 namespace {
+// The plane sections' line search goes at most this many steps from the edge loop's plane (64 half edges:
+// well past a 12-ring band, where no section closes).
+constexpr int kMaxSectionSteps = 64;
+
 // With CHOKELOOPS_DEBUG_SHORTEN=1 each call that reaches the funnel also prints how long its steps took, so
 // that where the shortening goes can be summed over a run (bands, searches, swaps, ...).
 struct StepClock {
@@ -252,6 +256,21 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   std::vector<double> sp(S.size(), 0.5);
   std::vector<Shortener::Apex> apexes;
   double L = sh.relax(S, 0, sp, apexes);
+  if (opt.plane_sections) {
+    // Steps of half the edge loop's mean edge: the sections' lengths vary smoothly at that scale (the
+    // cage's necks lie 4 to 8 such steps from their edge loop's plane), coarser steps found the same loops.
+    const double step = 0.5 * R.length / double(best.size());
+    std::vector<int> S3;
+    if (sh.strip_from_nearby_sections(sh.strip_points(S, sp), step, kMaxSectionSteps, S3)) {
+      std::vector<double> s3(S3.size(), 0.5);
+      std::vector<Shortener::Apex> a3;
+      const double L3 = sh.relax(S3, 0, s3, a3);
+      if (debug) std::fprintf(stderr, "plane section: strip %zu faces, relaxed %.9f (edge loop's strip %.9f)\n", S3.size(), L3, L);
+      if (L3 < L) L = L3, S.swap(S3), sp.swap(s3), apexes.swap(a3);
+    } else if (debug) {
+      std::fprintf(stderr, "plane section: none winds like the loop\n");
+    }
+  }
   int flat_rounds = 0, rounds = 0;
   // On a surface of revolution (a hole's wall, a tube of even radius) the loop drifts across a family of
   // nearly equal sections, each round of swaps gaining a millionth of its length: hundreds of rounds for

@@ -131,6 +131,15 @@ struct Shortener {
   // portals j in each [first, last] (a strip known whole but for the runs a swap batch put in).
   bool portals_ok(const std::vector<int>& S, const std::vector<std::array<int, 2>>* ranges = nullptr) const;
   int portal_of(int f, int g) const;
+  // The winding of the loop through strip S across the band's cut (0 when S is not a strip).
+  int strip_winding(const std::vector<int>& S) const;
+  // The strip of the band's faces that the plane through `point` square to `normal` cuts in its shortest
+  // closed section winding once like the input loop, in the input loop's direction (shorten_section.cpp);
+  // returns that section's length (infinite and S empty when there is none).
+  double shortest_plane_section(const P3& point, const P3& normal, std::vector<int>& S) const;
+  // The strip of the shortest of the band's plane sections parallel to the best-fit plane of `loop`, offset
+  // along its normal by multiples of `step` (at most max_steps): false when none winds like the loop.
+  bool strip_from_nearby_sections(const Polyline3& loop, double step, int max_steps, std::vector<int>& S) const;
 
   // Funnel through the strip cut at portal c with the loop crossing it at parameter s_c. Fills s (per
   // portal) and the apex list (portal index, mesh vertex), in order along the loop from c. Returns the length.

@@ -23,6 +23,10 @@
 //     path in a triangle strip). After each round of swaps the funnel is rerun only between the apexes
 //     around the swapped runs (widened until the apexes next to them stay apexes), and once over the whole
 //     strip at the end. Every step is a homotopy inside the band, so the class is kept.
+//     Before the swaps (with `plane_sections`), the band's plane sections parallel to the funnel loop's
+//     best-fit plane are measured along its normal (a line search in half-edge steps) and the strip of the
+//     shortest one that winds like the loop is taken instead when its funnel is shorter: the edge loop sits
+//     where the edges run best round a tube, not at its neck, and the swaps move it one vertex at a time.
 //     The funnel's lengths are checked against the polyline actually built from its portal crossings (the
 //     unfolded strip can overlap itself near tiny faces), and a final Gauss-Seidel pass moves each crossing
 //     to the best point of its portal (the length is convex in the crossing parameters).
@@ -49,6 +53,9 @@ struct ShortenOptions {
   // by more than 2e-4 of its length on the cage, Neptune, two fertilities, the pierced block and maltoporin
   // (one of fertility's came out 0.6% shorter), for a third of the searches.
   int cut_samples = 4;
+  // Step 3 starts from the shortest nearby plane section when that is shorter (see Method): on the cage's
+  // 75 handle loops the swap rounds went from 43 to 4 at the median, the loops within 2e-6 of their length.
+  bool plane_sections = true;
 };
 
 struct ShortenResult {
