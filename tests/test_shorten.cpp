@@ -283,6 +283,46 @@ TEST(Shorten, PlaneSectionOfTheBandWindsLikeTheLoop) {
   EXPECT_TRUE(S2.empty());
   // Far from the band no plane cuts it at all.
   EXPECT_FALSE(std::isfinite(sh.shortest_plane_section({0.5, 0.5, 0.5}, {-std::sin(phi + 1.5), std::cos(phi + 1.5), 0}, S2)));
+  // Any plane near the meridian's: no strip, or a whole strip of band faces winding like the loop whose section is as long as
+  // returned (measured here from the strip's own portals).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int strips = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::array<double, 3> at{0.5 + 0.3 * std::cos(phi) + 0.05 * u(rng), 0.5 + 0.3 * std::sin(phi) + 0.05 * u(rng), 0.5 + 0.05 * u(rng)};
+    // Tilted from the meridian plane by up to ~20 degrees, so that many of them close round the tube.
+    std::array<double, 3> n{-std::sin(phi) + 0.35 * u(rng), std::cos(phi) + 0.35 * u(rng), 0.35 * u(rng)};
+    const double norm = std::hypot(n[0], n[1], n[2]);
+    for (double& c : n) c /= norm;
+    std::vector<int> T;
+    const double l = sh.shortest_plane_section(at, n, T);
+    if (T.empty()) {
+      EXPECT_FALSE(std::isfinite(l));
+      continue;
+    }
+    ++strips;
+    EXPECT_TRUE(sh.portals_ok(T));
+    EXPECT_EQ(sh.strip_winding(T), sh.band.winding);
+    double along = 0;
+    std::vector<std::array<double, 3>> cross;
+    for (std::size_t j = 0; j < T.size(); ++j) {
+      const int h = sh.portal_of(T[j], T[(j + 1) % T.size()]);
+      const auto& a = b.torus.m.vertices[std::size_t(sh.vert(h))];
+      const auto& c = b.torus.m.vertices[std::size_t(sh.vert_to(h))];
+      const double ha = (a[0] - at[0]) * n[0] + (a[1] - at[1]) * n[1] + (a[2] - at[2]) * n[2];
+      const double hc = (c[0] - at[0]) * n[0] + (c[1] - at[1]) * n[1] + (c[2] - at[2]) * n[2];
+      const double t = ha / (ha - hc);
+      cross.push_back({a[0] + t * (c[0] - a[0]), a[1] + t * (c[1] - a[1]), a[2] + t * (c[2] - a[2])});
+    }
+    for (std::size_t j = 0; j < cross.size(); ++j) {
+      const auto& p = cross[j];
+      const auto& q = cross[(j + 1) % cross.size()];
+      along += std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]);
+    }
+    EXPECT_NEAR(along, l, 1e-9);
+  }
+  std::printf("random planes: %d of 300 cut the band in a section winding like the loop\n", strips);
+  EXPECT_GT(strips, 30);
 }
 
 TEST(Shorten, DoubleTorusHandleMeridianStaysEssential) {

@@ -85,7 +85,9 @@ double Shortener::shortest_plane_section(const P3& point, const P3& normal, std:
       entered = left;
       const int twin = band.twin_in_band[3 * i + std::size_t(exit)];
       if (twin < 0) break;  // the section leaves the band
-      const std::size_t j = std::size_t(*band.in_face.find(twin / 3));
+      const int* place = band.in_face.find(twin / 3);
+      if (!place) break;
+      const std::size_t j = std::size_t(*place);
       if (j == start) { closed = true; break; }
       std::array<int, 2> kj{};
       if (visited[j] || !crossed(j, kj)) break;
