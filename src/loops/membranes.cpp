@@ -485,26 +485,22 @@ class LoopTracer {
 void describe_loop(Loop& loop) {
   const auto& P = loop.points;
   loop.length = closed_length(P);
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (auto& p : P) mean += Eigen::Vector3d(p[0], p[1], p[2]);
-  mean /= double(P.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  std::array<double, 3> mean, n;
+  best_fit_plane(P, mean, n);
   double rmin = 1e300, rsum = 0;
+  const Eigen::Vector3d centre(mean[0], mean[1], mean[2]);
   for (auto& p : P) {
-    Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
-    cov += d * d.transpose();
-    rmin = std::min(rmin, d.norm());
-    rsum += d.norm();
+    const double r = (Eigen::Vector3d(p[0], p[1], p[2]) - centre).norm();
+    rmin = std::min(rmin, r);
+    rsum += r;
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  Eigen::Vector3d n = eig.eigenvectors().col(0);
   // A sign convention makes the normal reproducible: its largest component is positive.
   int big = 0;
   for (int a = 1; a < 3; ++a)
-    if (std::abs(n[a]) > std::abs(n[big])) big = a;
-  if (n[big] < 0) n = -n;
-  loop.centroid = {mean[0], mean[1], mean[2]};
-  loop.normal = {n[0], n[1], n[2]};
+    if (std::abs(n[std::size_t(a)]) > std::abs(n[std::size_t(big)])) big = a;
+  if (n[std::size_t(big)] < 0) n = {-n[0], -n[1], -n[2]};
+  loop.centroid = mean;
+  loop.normal = n;
   loop.radius_min = rmin;
   loop.radius_mean = rsum / double(P.size());
 }

@@ -7,7 +7,6 @@
 // loop round a block's flat wall, lie close to a plane; the planes parallel to the edge loop's own cut the
 // band in sections whose lengths (a few microseconds each) find the neck, and the faces the shortest one
 // crosses form a strip whose funnel leaves the swaps a few rounds.
-#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,6 +14,7 @@
 #include <map>
 #include <vector>
 
+#include "chokeloops/surface/topology.h"
 #include "shortener.h"
 
 namespace chokeloops::shorten_detail {
@@ -105,42 +105,42 @@ double Shortener::shortest_plane_section(const P3& point, const P3& normal, std:
 }
 
 bool Shortener::strip_from_nearby_sections(const Polyline3& loop, double step, int max_steps, std::vector<int>& S) const {
+  S.clear();
   if (loop.size() < 3 || !(step > 0)) return false;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : loop) mean += Eigen::Vector3d(p[0], p[1], p[2]);
-  mean /= double(loop.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : loop) {
-    const Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
-    cov += d * d.transpose();
-  }
-  const Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  P3 mean, n;
+  best_fit_plane(loop, mean, n);
   std::map<int, double> length_at;  // offset (in steps) -> its shortest section's length
-  std::vector<int> strip;
+  std::vector<int> strip;           // the strip of the offset measured last, when it was measured anew
   auto length = [&](int offset) {
     if (auto it = length_at.find(offset); it != length_at.end()) return it->second;
-    const Eigen::Vector3d c = mean + (double(offset) * step) * n;
-    return length_at[offset] = shortest_plane_section({c[0], c[1], c[2]}, {n[0], n[1], n[2]}, strip);
+    const double at = double(offset) * step;
+    return length_at[offset] = shortest_plane_section({mean[0] + at * n[0], mean[1] + at * n[1], mean[2] + at * n[2]}, n, strip);
   };
-  // A line search over the offsets: steps that double while the sections shorten, then halve.
+  // A line search over the offsets: steps that double while the sections shorten, then halve. S keeps the
+  // strip of the best offset so far.
   int best = 0;
   double best_length = length(0);
-  const double up = length(1), down = length(-1);
-  int direction = up < down ? 1 : -1;
-  if (std::min(up, down) < best_length) best = direction, best_length = std::min(up, down);
-  else if (!std::isfinite(best_length)) return false;
+  S.swap(strip);
+  const double up = length(1);
+  std::vector<int> up_strip;
+  up_strip.swap(strip);
+  const double down = length(-1);
+  const int direction = up < down ? 1 : -1;
+  if (std::min(up, down) < best_length) {
+    best = direction, best_length = std::min(up, down);
+    S.swap(direction == 1 ? up_strip : strip);
+  } else if (!std::isfinite(best_length)) {
+    return false;
+  }
   if (best != 0)
     for (int stride = 2; stride >= 1;) {
       const int next = best + direction * stride;
       if (std::abs(next) > max_steps) { stride /= 2; continue; }
-      const double l = length(next);
-      if (l < best_length) best = next, best_length = l, stride *= 2;
+      const double l = length(next);  // an offset measured before is no shorter than the best
+      if (l < best_length) best = next, best_length = l, stride *= 2, S.swap(strip);
       else stride /= 2;
     }
-  if (!std::isfinite(best_length)) return false;
-  const Eigen::Vector3d c = mean + (double(best) * step) * n;
-  shortest_plane_section({c[0], c[1], c[2]}, {n[0], n[1], n[2]}, S);
-  return !S.empty() && portals_ok(S);
+  return std::isfinite(best_length) && !S.empty() && portals_ok(S);
 }
 
 }  // namespace chokeloops::shorten_detail

@@ -8,6 +8,8 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -305,6 +307,20 @@ double closed_length(const Polyline3& p) {
   for (size_t i = 0; i < p.size(); ++i) L += dist(p[i], p[(i + 1) % p.size()]);
   return L;
 }
+void best_fit_plane(const Polyline3& points, std::array<double, 3>& centroid, std::array<double, 3>& normal) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += Eigen::Vector3d(p[0], p[1], p[2]);
+  mean /= double(points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) {
+    const Eigen::Vector3d d = Eigen::Vector3d(p[0], p[1], p[2]) - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  centroid = {mean[0], mean[1], mean[2]};
+  normal = {n[0], n[1], n[2]};
+}
+
 Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop) {
   Polyline3 p;
   for (int v : loop) p.push_back(mesh.vertices.at(size_t(v)));

@@ -79,5 +79,8 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
 double closed_length(const Polyline3& polyline);
 double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop);
 Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop);
+// The plane closest to a polyline's points in the least-squares sense: their centroid, and the unit normal
+// of least spread (either sign).
+void best_fit_plane(const Polyline3& points, std::array<double, 3>& centroid, std::array<double, 3>& normal);
 
 }  // namespace chokeloops
