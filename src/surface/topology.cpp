@@ -328,6 +328,28 @@ Polyline3 loop_points(const SurfaceMesh& mesh, const std::vector<int>& loop) {
 }
 double loop_length(const SurfaceMesh& mesh, const std::vector<int>& loop) { return closed_length(loop_points(mesh, loop)); }
 
+void remove_repeats_and_spurs(std::vector<int>& path) {
+  // Spurs a b a -> a and repeats, cyclically, until stable.
+  bool changed = true;
+  while (changed && path.size() >= 3) {
+    changed = false;
+    std::vector<int> out;
+    for (int v : path) {
+      if (!out.empty() && out.back() == v) { changed = true; continue; }
+      if (out.size() >= 2 && out[out.size() - 2] == v) { out.pop_back(); changed = true; continue; }
+      out.push_back(v);
+    }
+    while (out.size() >= 2 && out.front() == out.back()) out.pop_back(), changed = true;
+    while (out.size() >= 3 && out[out.size() - 2] == out.front()) out.pop_back(), changed = true;
+    while (out.size() >= 3 && out[1] == out.back()) {  // spur through the start: b a b ... -> rotate away
+      out.erase(out.begin());
+      out.pop_back();
+      changed = true;
+    }
+    path.swap(out);
+  }
+}
+
 std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const Polyline3& polyline, int component) {
   return snap_polyline_to_edge_path(mesh, nullptr, polyline, component);
 }
@@ -408,25 +430,7 @@ std::vector<int> snap_polyline_to_edge_path(const SurfaceMesh& mesh, const MeshA
     path.push_back(s);
     for (size_t k = 0; k + 1 < seg_path.size(); ++k) path.push_back(seg_path[k]);
   }
-  // Remove spurs a b a -> a and repeats, cyclically, until stable.
-  bool changed = true;
-  while (changed && path.size() >= 3) {
-    changed = false;
-    std::vector<int> out;
-    for (int v : path) {
-      if (!out.empty() && out.back() == v) { changed = true; continue; }
-      if (out.size() >= 2 && out[out.size() - 2] == v) { out.pop_back(); changed = true; continue; }
-      out.push_back(v);
-    }
-    while (out.size() >= 2 && out.front() == out.back()) out.pop_back(), changed = true;
-    while (out.size() >= 3 && out[out.size() - 2] == out.front()) out.pop_back(), changed = true;
-    while (out.size() >= 3 && out[1] == out.back()) {  // spur through the start: b a b ... -> rotate away
-      out.erase(out.begin());
-      out.pop_back();
-      changed = true;
-    }
-    path.swap(out);
-  }
+  remove_repeats_and_spurs(path);
   // Cut out repeated vertices (figure-eights): keep the longest simple piece is not homotopy-safe, so
   // leave them; callers check loop_is_simple.
   return path;

@@ -63,6 +63,10 @@ bool loop_separates_surface(const SurfaceMesh& mesh, const std::vector<int>& loo
 // True when every vertex of the loop occurs once and the loop has at least 3 vertices.
 bool loop_is_simple(const std::vector<int>& loop);
 
+// Removes from a closed edge path (a cyclic vertex list) the repeated vertices and the back-and-forth spurs
+// a b a, cyclically, until none is left; a figure-eight stays (callers check loop_is_simple).
+void remove_repeats_and_spurs(std::vector<int>& path);
+
 // Turns a closed polyline lying on (or very near) the surface into a closed edge path: the nearest mesh
 // vertex of every point, joined by shortest edge paths (Dijkstra over the part of the mesh near the
 // polyline), with repeated vertices and back-and-forth spurs removed. When `component` >= 0, only vertices
