@@ -529,20 +529,25 @@ TEST(VolumeMni, GeneratorsThinnerThanAVoxelGetLocalLoops) {
   o.max_loops = -1;
   const AnalyzeResult r = analyze_grid(std::move(g), o);
   EXPECT_EQ(r.surface_stats.genus, r.chokes.handle_generators);
-  int thin = 0, sections = 0, short_sections = 0, over_1000 = 0;
+  int thin = 0, local = 0, sections = 0, short_sections = 0, over_1000 = 0;
   for (const Loop& l : r.loops) {
     if (l.choke.kind != Kind::Generator || l.choke.depth >= r.grid.voxel_size || !l.found) continue;
     ++thin;
+    local += l.length < 20 * r.grid.voxel_size;
     const bool section = l.note.find("plane section") != std::string::npos;
     sections += section;
     short_sections += section && l.length < 20 * r.grid.voxel_size;
     over_1000 += l.length > 1000 * r.grid.voxel_size;
   }
-  std::printf("GM crop: genus %d, %zu loops, %d generators thinner than a voxel with a loop, %d of them plane sections "
-              "(%d shorter than 20 voxels), %d longer than 1000 voxels\n",
-              r.surface_stats.genus, r.loops.size(), thin, sections, short_sections, over_1000);
+  std::printf("GM crop: genus %d, %zu loops, %d generators thinner than a voxel with a loop, %d of them shorter than 20 "
+              "voxels, %d plane sections (%d shorter than 20 voxels), %d longer than 1000 voxels\n",
+              r.surface_stats.genus, r.loops.size(), thin, local, sections, short_sections, over_1000);
+  // A handle thinner than a voxel has a loop of a few voxels at most: the membrane's rim (taken along one
+  // side of the interface, edge by edge) gave 60 of 60 such loops, where snapping the rim's points to their
+  // nearest vertices had collapsed the smallest rims and left 10 of 59 to longer loops (6 over 100 voxels).
   EXPECT_GT(thin, 40);
-  EXPECT_GE(sections, 19);
-  EXPECT_GE(short_sections, 16);
+  EXPECT_GE(local, thin - 2);
+  EXPECT_GE(sections, 10);
+  EXPECT_EQ(short_sections, sections);
   EXPECT_EQ(over_1000, 0);
 }

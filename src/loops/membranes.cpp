@@ -37,6 +37,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <unordered_map>
@@ -313,6 +314,29 @@ class LoopTracer {
     bool rejected = false;  // an essential curve was turned down because it links one of them
   };
 
+  // The edge path along one side of an interface curve that crosses the surface edges `edges` (in order
+  // round the curve): of each edge, its end labelled `side`. Two edges crossed in turn share a face and
+  // the corner whose label differs from the other two: the ends on one side are that corner twice, or the
+  // face's other two corners, joined by its third edge; so the ends make an edge path without a search,
+  // in the faces the curve crosses (the curve's homotopy class). Of the two sides, the shorter path.
+  std::vector<int> label_side_path(const std::vector<std::int64_t>& edges, const StampedMarks<std::int8_t>& label) const {
+    std::vector<int> best;
+    double best_length = std::numeric_limits<double>::infinity();
+    for (std::int8_t side = 1; side <= 2; ++side) {
+      std::vector<int> path;
+      path.reserve(edges.size());
+      for (std::int64_t e : edges) {
+        const int a = int(e >> 32), b = int(e & 0xffffffff);
+        const int v = label.get(a) == side ? a : b;
+        if (path.empty() || path.back() != v) path.push_back(v);
+      }
+      remove_repeats_and_spurs(path);
+      const double length = path.size() < 3 ? std::numeric_limits<double>::infinity() : loop_length(S_, path);
+      if (length < best_length) best_length = length, best.swap(path);
+    }
+    return best;
+  }
+
   // open_sides: set to the box's sides (below x y z, above x y z) where a curve through the choke runs out of
   // the box, when none closes there.
   Attempt try_box(const Choke& c, const detail::BoxExtent& extent, int seed_radius, bool by_distance, Polyline3& out,
@@ -379,18 +403,21 @@ class LoopTracer {
       }
     std::vector<char> used(segments.size(), 0);
     const double h = g_.voxel_size;
-    struct Candidate { double distance; Polyline3 curve; };
+    struct Candidate { double distance; Polyline3 curve; std::vector<std::int64_t> edges; };
     std::vector<Candidate> candidates;
     for (int start = 0; start < int(segments.size()); ++start) {
       if (used[start]) continue;
       Polyline3 curve;
+      std::vector<std::int64_t> edges;
       std::int64_t first = segments[start][0], e = segments[start][1];
       int seg = start;
       bool closed = false;
       curve.push_back(detail::edge_midpoint(S_, first));
+      edges.push_back(first);
       used[seg] = 1;
       for (;;) {
         curve.push_back(detail::edge_midpoint(S_, e));
+        edges.push_back(e);
         auto& pair = at[e];
         int next = pair[0] == seg ? pair[1] : pair[0];
         if (next < 0 || used[next]) break;
@@ -410,7 +437,7 @@ class LoopTracer {
         std::fprintf(stderr, "membranes: %s generator depth %g box %d: far curve at %g, %zu points %s\n", to_string(c.side),
                      c.depth, r, d, curve.size(), ct ? "null-homologous" : "ESSENTIAL");
       }
-      if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve)});
+      if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve), std::move(edges)});
     }
     if (candidates.empty()) {
       detail::mark_open_sides(g_, S_, segments, at, box, c.point, c.depth + 4 * h, open_sides);
@@ -421,19 +448,14 @@ class LoopTracer {
                      [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
     if (c.kind != Kind::Generator || !T_) {
       out = std::move(candidates[0].curve);
-      out_path.clear();
+      out_path = label_side_path(candidates[0].edges, vertex_label);
       return Attempt::Found;
     }
     // A generator's membrane is a disk across its handle (tunnel); its boundary must be non-trivial on the
     // surface. Where the core is flat (a thin wall) the two zones also meet along the wall, and that
     // interface curve bounds a disk on the surface: it may be the nearest one, so each curve is asked in turn.
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-      std::vector<int> path;
-      try {
-        path = snap_polyline_to_edge_path(S_, A_, candidates[i].curve);
-      } catch (const Error&) {
-        continue;  // not a connected curve on the surface
-      }
+      std::vector<int> path = label_side_path(candidates[i].edges, vertex_label);
       // Null in Z/2 homology rather than contractible: one flood for any curve (a snapped curve may touch
       // itself, where the exact contractibility test would need CGAL's structure over the whole surface), and
       // a generator's curve must be non-null anyway: a disk across a handle cuts it, so its boundary cannot
