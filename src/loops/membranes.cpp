@@ -198,6 +198,16 @@ class LoopTracer {
       // 0.17%, for 2.4 searches a loop instead of 6.4 (a loop that ends at its band's edge still slides).
       so.cut_samples = 0;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
+      // On sub-voxel structures one side of the interface can touch itself, where no band around it is an
+      // annulus; the curve's points snapped to their nearest vertices may still have one.
+      if (best.rings == 0 && !raw_path.empty()) {
+        try {
+          ShortenResult snapped = shorten_polyline(S_, A_, raw, so);
+          if (snapped.rings > 0) best = std::move(snapped);
+        } catch (const Error&) {
+          // keep the unshortened side path
+        }
+      }
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
       if (best.rings > 0 && options.slide && best.at_band_edge) slide_to_narrowest(best, so, c.depth + 2 * h);
