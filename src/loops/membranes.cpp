@@ -34,6 +34,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -198,20 +199,29 @@ class LoopTracer {
       // 0.17%, for 2.4 searches a loop instead of 6.4 (a loop that ends at its band's edge still slides).
       so.cut_samples = 0;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
-      // On sub-voxel structures one side of the interface can touch itself, where no band around it is an
-      // annulus; the curve's points snapped to their nearest vertices may still have one.
-      if (best.rings == 0 && !raw_path.empty()) {
+      // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
+      auto slide = [&](ShortenResult& r) {
+        if (r.rings > 0 && options.slide && r.at_band_edge) slide_to_narrowest(r, so, c.depth + 2 * h);
+      };
+      slide(best);
+      // The curve's points snapped to their nearest vertices are a second start: where no band around the
+      // side path is an annulus (on sub-voxel structures a side can touch itself), and for a choke whose
+      // loop came out under half its curve's length, a curve far from any geodesic (a rim wandering over a
+      // pitted cortex) where the start decides which local loop it ends in; the shorter loop is kept. (A
+      // generator's other start could lie in another homology class: its side path alone is shortened.)
+      const bool other_start = !raw_path.empty() && (best.rings == 0 || (c.kind != Kind::Generator && best.length < 0.5 * loop.raw_length));
+      if (other_start) {
         try {
           ShortenResult snapped = shorten_polyline(S_, A_, raw, so);
-          if (snapped.rings > 0) best = std::move(snapped);
+          slide(snapped);
+          if (snapped.rings > 0 && (best.rings == 0 || snapped.length < best.length)) best = std::move(snapped);
         } catch (const Error&) {
-          // keep the unshortened side path
+          // keep the side path's loop
         }
       }
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
-      // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
-      if (best.rings > 0 && options.slide && best.at_band_edge) slide_to_narrowest(best, so, c.depth + 2 * h);
-      if (best.points.size() >= 3) loop.points = best.points;
+      // Unshortened, the interface curve itself may be shorter than its edge path (it cuts across faces).
+      if (best.points.size() >= 3 && (best.rings > 0 || closed_length(best.points) < loop.raw_length)) loop.points = best.points;
       loop.edge_path = best.edge_path;
     } else {
       loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
@@ -335,22 +345,23 @@ class LoopTracer {
   // the corner whose label differs from the other two: the ends on one side are that corner twice, or the
   // face's other two corners, joined by its third edge; so the ends make an edge path without a search,
   // in the faces the curve crosses (the curve's homotopy class). Of the two sides, the shorter path.
-  std::vector<int> label_side_path(const std::vector<std::int64_t>& edges, const StampedMarks<std::int8_t>& label) const {
-    std::vector<int> best;
-    double best_length = std::numeric_limits<double>::infinity();
-    for (std::int8_t side = 1; side <= 2; ++side) {
-      std::vector<int> path;
+  // Both sides' paths come back, the shorter first (a path of fewer than 3 vertices, a collapsed side, last).
+  std::array<std::vector<int>, 2> label_side_paths(const std::vector<std::int64_t>& edges, const StampedMarks<std::int8_t>& label) const {
+    std::array<std::vector<int>, 2> paths;
+    std::array<double, 2> length{};
+    for (int side = 0; side < 2; ++side) {
+      std::vector<int>& path = paths[std::size_t(side)];
       path.reserve(edges.size());
       for (std::int64_t e : edges) {
         const int a = int(e >> 32), b = int(e & 0xffffffff);
-        const int v = label.get(a) == side ? a : b;
+        const int v = label.get(a) == side + 1 ? a : b;
         if (path.empty() || path.back() != v) path.push_back(v);
       }
       remove_repeats_and_spurs(path);
-      const double length = path.size() < 3 ? std::numeric_limits<double>::infinity() : loop_length(S_, path);
-      if (length < best_length) best_length = length, best.swap(path);
+      length[std::size_t(side)] = path.size() < 3 ? std::numeric_limits<double>::infinity() : loop_length(S_, path);
     }
-    return best;
+    if (length[1] < length[0]) std::swap(paths[0], paths[1]);
+    return paths;
   }
 
   // open_sides: set to the box's sides (below x y z, above x y z) where a curve through the choke runs out of
@@ -464,19 +475,34 @@ class LoopTracer {
                      [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
     if (c.kind != Kind::Generator || !T_) {
       out = std::move(candidates[0].curve);
-      out_path = label_side_path(candidates[0].edges, vertex_label);
+      out_path = std::move(label_side_paths(candidates[0].edges, vertex_label)[0]);
+      if (out_path.size() < 3) out_path.clear();  // both sides collapsed: the curve is snapped instead
       return Attempt::Found;
     }
     // A generator's membrane is a disk across its handle (tunnel); its boundary must be non-trivial on the
     // surface. Where the core is flat (a thin wall) the two zones also meet along the wall, and that
     // interface curve bounds a disk on the surface: it may be the nearest one, so each curve is asked in turn.
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-      std::vector<int> path = label_side_path(candidates[i].edges, vertex_label);
       // Null in Z/2 homology rather than contractible: one flood for any curve (a snapped curve may touch
       // itself, where the exact contractibility test would need CGAL's structure over the whole surface), and
       // a generator's curve must be non-null anyway: a disk across a handle cuts it, so its boundary cannot
-      // separate the surface.
-      bool contractible = path.size() < 3 || T_->null_homologous(path);
+      // separate the surface. The curve's edge paths (its two sides, then its points snapped) are asked in
+      // turn: where the rim of a sub-voxel handle touches itself, one side can close up around nothing.
+      auto sides = label_side_paths(candidates[i].edges, vertex_label);
+      std::vector<int> path;
+      bool contractible = true;
+      for (int k = 0; k < 3 && contractible; ++k) {
+        if (k < 2) {
+          path = std::move(sides[std::size_t(k)]);
+        } else {
+          try {
+            path = snap_polyline_to_edge_path(S_, A_, candidates[i].curve);
+          } catch (const Error&) {
+            break;  // not a connected curve on the surface
+          }
+        }
+        contractible = path.size() < 3 || T_->null_homologous(path);
+      }
       if (debug_)
         std::fprintf(stderr, "membranes: %s generator depth %g box %d: curve %zu/%zu at %g, %zu points, %s\n",
                      to_string(c.side), c.depth, r, i + 1, candidates.size(), candidates[i].distance,
