@@ -32,9 +32,9 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -340,12 +340,12 @@ class LoopTracer {
     bool rejected = false;  // an essential curve was turned down because it links one of them
   };
 
-  // The edge path along one side of an interface curve that crosses the surface edges `edges` (in order
-  // round the curve): of each edge, its end labelled `side`. Two edges crossed in turn share a face and
-  // the corner whose label differs from the other two: the ends on one side are that corner twice, or the
-  // face's other two corners, joined by its third edge; so the ends make an edge path without a search,
-  // in the faces the curve crosses (the curve's homotopy class). Of the two sides, the shorter path.
-  // Both sides' paths come back, the shorter first (a path of fewer than 3 vertices, a collapsed side, last).
+  // The edge paths along the two sides of an interface curve that crosses the surface edges `edges` (in
+  // order round the curve), the shorter first (a side collapsed to fewer than 3 vertices last): of each
+  // edge, its end in that side's zone. Two edges crossed in turn share a face and the corner whose label
+  // differs from the other two: the ends on one side are that corner twice, or the face's other two
+  // corners, joined by its third edge; so the ends make an edge path without a search, in the faces the
+  // curve crosses (the curve's homotopy class, unless the side touches itself).
   std::array<std::vector<int>, 2> label_side_paths(const std::vector<std::int64_t>& edges, const StampedMarks<std::int8_t>& label) const {
     std::array<std::vector<int>, 2> paths;
     std::array<double, 2> length{};
