@@ -1,6 +1,7 @@
 // Topological checks of loops on extracted surfaces: CGAL contractibility, separation, polyline snapping.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -271,4 +272,27 @@ TEST(Topology, HomologyBasisAgreesWithFaceColouringOnRandomCycles) {
   EXPECT_GT(null, 10);
   EXPECT_GT(essential, 10);
   EXPECT_EQ(topo.cgal_queries(), 0);
+}
+
+TEST(Topology, RepeatsAndSpursLeaveTheLoopTheyHangOn) {
+  // A pentagon 1 2 3 4 9 with a repeat (4 4), a spur out and back (2 5 2), and a spur across the start (the
+  // path ends 9 1 9 and closes back to 1): the pentagon is what is left, rotated at most.
+  std::vector<int> path{1, 2, 2, 5, 2, 3, 4, 4, 9, 1, 9};
+  remove_repeats_and_spurs(path);
+  ASSERT_EQ(path.size(), 5u);
+  const auto at = std::find(path.begin(), path.end(), 1);
+  ASSERT_NE(at, path.end());
+  std::rotate(path.begin(), at, path.end());
+  EXPECT_EQ(path, (std::vector<int>{1, 2, 3, 4, 9}));
+  // Nested spurs collapse in turn; a figure-eight through 1 keeps both of its loops.
+  std::vector<int> nested{1, 2, 3, 6, 7, 6, 3, 4};
+  remove_repeats_and_spurs(nested);
+  EXPECT_EQ(nested, (std::vector<int>{1, 2, 3, 4}));
+  std::vector<int> eight{1, 2, 3, 1, 4, 5};
+  remove_repeats_and_spurs(eight);
+  EXPECT_EQ(eight, (std::vector<int>{1, 2, 3, 1, 4, 5}));
+  // A path that is all spur has nothing left to go round.
+  std::vector<int> spur{1, 2, 3, 2};
+  remove_repeats_and_spurs(spur);
+  EXPECT_LT(spur.size(), 3u);
 }
