@@ -220,8 +220,9 @@ class LoopTracer {
         }
       }
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
-      // Unshortened, the interface curve itself may be shorter than its edge path (it cuts across faces).
-      if (best.points.size() >= 3 && (best.rings > 0 || closed_length(best.points) < loop.raw_length)) loop.points = best.points;
+      // Unshortened (best.length is then its edge path's), the interface curve itself may be shorter than
+      // its edge path (it cuts across faces).
+      if (best.points.size() >= 3 && (best.rings > 0 || best.length < loop.raw_length)) loop.points = best.points;
       loop.edge_path = best.edge_path;
     } else {
       loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
