@@ -340,38 +340,37 @@ class RaySection {
     cells_.near_segment(arr(p_), arr(p_ + (max_radius_ + 2 * cell) * e1_), cell, candidates);
     std::sort(candidates.begin(), candidates.end());
     const double tol = 1e-9 * (max_radius_ + cell);
-    std::vector<int> seeds;
+    // Each seed with where its segment meets the ray (its distance from p along e1).
+    std::vector<std::pair<double, int>> seeds;
     for (int f : candidates) {
       Cut c;
       if (!cut_of(f, c)) continue;
       const V3 a = point_on(f, c.edge[0]) - p_, b = point_on(f, c.edge[1]) - p_;
       const double ax = a.dot(e1_), ay = a.dot(e2_), bx = b.dot(e1_), by = b.dot(e2_);
       if (std::min(ay, by) > tol || std::max(ay, by) < -tol || std::max(ax, bx) < -tol) continue;
-      seeds.push_back(f);
+      const double x = std::abs(ay - by) > tol ? ax + (bx - ax) * ay / (ay - by) : std::min(ax, bx);
+      seeds.push_back({x, f});
     }
-    struct Curve { std::uint64_t key; int face; };
-    std::vector<Curve> closed;
+    // The curves that wind around p are disjoint simple curves of the plane, so they nest, and the innermost
+    // (the least area) meets the ray nearest p: the seeds are followed from p outward and the first closed
+    // curve that winds around p is the section; the curves beyond it, often most of a wide section's faces
+    // (a block's outline, the walls of the holes past it), are not followed.
+    std::sort(seeds.begin(), seeds.end());
     std::unordered_set<int> seen;
-    for (int f : seeds) {
+    std::vector<Step> walk;
+    for (const auto& [x, f] : seeds) {
       if (seen.count(f)) continue;
-      Curve c{~std::uint64_t(0), -1};
+      std::size_t first = 0;
       bool is_closed = false;
-      if (!follow(f, seen, is_closed, c.key, c.face)) return false;
-      if (is_closed) closed.push_back(c);
-    }
-    std::sort(closed.begin(), closed.end(), [](const Curve& a, const Curve& b) { return a.key < b.key; });
-    double best_area = 1e300;
-    for (const Curve& c : closed) {
+      if (!follow(f, seen, is_closed, walk, first)) return false;
+      if (!is_closed) continue;
       std::vector<V3> pts;
-      if (!points_from(c.face, pts)) return false;
+      points_from(walk, first, pts);
       if (pts.size() < 3) continue;
       double area;
       if (!winds_around(pts, p_, e1_, e2_, area)) continue;
-      if (area < best_area) {
-        best_area = area;
-        out.clear();
-        for (const V3& x : pts) out.push_back(arr(x));
-      }
+      for (const V3& q : pts) out.push_back(arr(q));
+      return true;
     }
     return true;
   }
@@ -424,12 +423,20 @@ class RaySection {
     if (cg.edge[0] != entry && cg.edge[1] != entry) return fallback = true, false;
     return true;
   }
-  // The curve through seed face f: marks its faces seen; when it closes, its first face in near_plane's order.
-  bool follow(int f, std::unordered_set<int>& seen, bool& is_closed, std::uint64_t& min_key, int& min_face) const {
+  // A face of a curve, with its cut edges in section_of's order and the edges the walk entered and left it by.
+  struct Step {
+    int face;
+    Cut cut;
+    int entry, exit;
+  };
+  // The curve through seed face f: marks its faces seen; when it closes, `walk` holds its faces in turn (from
+  // f, leaving by its second cut edge) and `first` the place of its first face in near_plane's order.
+  bool follow(int f, std::unordered_set<int>& seen, bool& is_closed, std::vector<Step>& walk, std::size_t& first) const {
     Cut c0;
     cut_of(f, c0);
     seen.insert(f);
-    min_key = c0.key, min_face = f;
+    walk.assign(1, Step{f, c0, c0.edge[0], c0.edge[1]});
+    first = 0;
     const std::size_t limit = S_.faces.size() + 1;
     for (int dir = 1; dir >= 0; --dir) {
       int g = f, e = c0.edge[dir];
@@ -443,28 +450,28 @@ class RaySection {
         }
         if (h == f) { is_closed = true; return true; }
         if (steps > limit || !seen.insert(h).second) return false;  // not a simple curve: leave it to section_of
-        if (ch.key < min_key) min_key = ch.key, min_face = h;
-        g = h, e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
+        e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
+        if (dir == 1) {
+          walk.push_back(Step{h, ch, entry, e});
+          if (ch.key < walk[first].cut.key) first = walk.size() - 1;
+        }
+        g = h;
       }
     }
     return true;
   }
-  // The curve's points as section_of lists them: from face f's first cut edge, leaving by its second.
-  bool points_from(int f, std::vector<V3>& pts) const {
-    Cut c0;
-    cut_of(f, c0);
-    pts.push_back(point_on(f, c0.edge[0]));
-    int g = f, e = c0.edge[1];
-    for (std::size_t steps = 0; steps <= S_.faces.size(); ++steps) {
-      int h, entry;
-      Cut ch;
-      bool fallback = false;
-      if (!across(g, e, h, entry, ch, fallback)) return false;
-      if (h == f) return true;
-      pts.push_back(point_on(g, e));
-      g = h, e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
+  // The closed curve's points as section_of lists them: from its first face's first cut edge, leaving by its
+  // second (the walk's way round, or against it). Each point is that of the edge between two faces in turn.
+  void points_from(const std::vector<Step>& walk, std::size_t first, std::vector<V3>& pts) const {
+    const std::size_t m = walk.size();
+    auto exit_point = [&](std::size_t i) { return point_on(walk[i].face, walk[i].exit); };
+    const Step& start = walk[first];
+    pts.reserve(m);
+    if (start.cut.edge[1] == start.exit) {
+      for (std::size_t k = 0; k < m; ++k) pts.push_back(exit_point((first + m - 1 + k) % m));
+    } else {
+      for (std::size_t k = 0; k < m; ++k) pts.push_back(exit_point((first + m - k) % m));
     }
-    return false;
   }
 
   const SurfaceMesh& S_;
