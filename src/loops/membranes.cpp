@@ -232,6 +232,15 @@ class LoopTracer {
           // keep the side path's loop
         }
       }
+      // A generator's loop must stay essential. Where a band crosses a handle thinner than a voxel, the shortest
+      // loop in it can slip off that handle (on the grey-matter map a 3 mm plane section came out contractible):
+      // the curve that was checked is then reported unshortened.
+      if (c.kind == Kind::Generator && T_ && best.rings > 0 && !raw_path.empty() && T_->null_homologous(best.edge_path)) {
+        loop.edge_path = raw_path;
+        loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: its shortest loop in the band is null-homologous";
+        describe_loop(loop);
+        return loop;
+      }
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
       // Unshortened (best.length is then its edge path's), the interface curve itself may be shorter than
       // its edge path (it cuts across faces).
