@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 
 #include "two_lobe_flood.h"
 
@@ -269,6 +270,92 @@ MembraneVoxels nearby_pinch(const ScalarGrid& grid, const FreudenthalComplex& cx
   return out;
 }
 
+// The Sheet ([0]) and Plane ([1]) membranes that are `wanted`, from one sequence of flood boxes: both shapes
+// read the same floods and differ only in what they take from a flooded box, so each comes out as it would
+// alone, and a choke whose sheet never closes (flooded up to the whole grid) pays for those floods once, not
+// twice. Stops at the first box where membrane[stop_at] closes. A flood that throws ends every shape still
+// open, with the error as its note (and in `failure`).
+struct SheetAndPlane {
+  std::array<MembraneVoxels, 2> membrane;
+  std::exception_ptr failure;
+};
+
+SheetAndPlane sheet_and_plane(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, const LoopOptions& options,
+                              const std::array<RegionBounds, 2>* bounds, std::array<bool, 2> open, int stop_at) {
+  SheetAndPlane out;
+  for (auto& m : out.membrane) m.note = "the membrane did not close near the choke";
+  const double h = grid.voxel_size;
+  const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
+  int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
+  int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
+  const auto sc = cx.coords(c.saddle);
+  for (int attempt = 0; attempt < 16 && (open[0] || open[1]); ++attempt) {
+    detail::FloodBox box;
+    detail::FloodOutcome outcome;
+    try {
+      outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box, bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
+    } catch (const Error& e) {
+      out.failure = std::current_exception();
+      for (int k = 0; k < 2; ++k)
+        if (open[std::size_t(k)]) out.membrane[std::size_t(k)].note = e.what();
+      break;
+    }
+    if (outcome == detail::FloodOutcome::Shrink) {
+      if (seed_r <= 1) break;
+      seed_r = seed_r * 2 / 3;
+      continue;
+    }
+    if (outcome == detail::FloodOutcome::Flooded && open[1]) {
+      MembraneVoxels& m = out.membrane[1];
+      const Sheet s = plane_piece(box, grid, sc, m.shore);
+      if (s == Sheet::AtGridBorder) {
+        m.note = "the cut plane reaches the side of the grid";
+        m.shore.clear();
+        open[1] = false;
+      } else if (s != Sheet::Open) {
+        m.found = !m.shore.empty();
+        m.box_radius = r;
+        if (m.found) m.note.clear();
+        open[1] = false;
+      }
+    }
+    if (outcome == detail::FloodOutcome::Flooded && open[0]) {
+      MembraneVoxels& m = out.membrane[0];
+      const std::int64_t start = start_of_sheet(box, {sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]});
+      std::vector<std::uint32_t> sheet;
+      const Sheet s = start < 0 ? Sheet::AtGridBorder
+                                : collect_sheet(box, grid, std::uint32_t(start), [&](std::uint32_t li) { return box.in_contact(li); }, sheet);
+      if (start < 0) {
+        m.note = "the two zones of the membrane flood never met";
+        open[0] = false;
+      } else if (s == Sheet::AtGridBorder) {
+        m.note = "the membrane reaches the side of the grid: it is not a disc bounded by the surface";
+        open[0] = false;
+      } else if (s != Sheet::Open) {
+        // Either shore alone separates the zones (every path from one to the other steps from a shore vertex
+        // of the first to one of the second): the smaller changes fewer voxels.
+        std::array<std::vector<std::uint32_t>, 2> shores;
+        for (std::uint32_t li : sheet) shores[box.zone(li) == 1 ? 0 : 1].push_back(li);
+        const int pick = shores[1].size() < shores[0].size() ? 1 : 0;
+        add_debris(box, grid, shores[pick]);
+        m.shore.clear();
+        for (std::uint32_t li : shores[pick]) m.shore.push_back(box.global(li));
+        std::sort(m.shore.begin(), m.shore.end());
+        m.found = !m.shore.empty();
+        m.box_radius = r;
+        if (m.found) m.note.clear();
+        open[0] = false;
+      }
+    }
+    if (out.membrane[std::size_t(stop_at)].found || !(open[0] || open[1])) break;
+    const int cap = options.max_box_radius > 0 ? std::min(full, options.max_box_radius) : full;
+    if (r >= cap) break;
+    r = std::min(cap, int(std::ceil(r * 1.8)));
+    if (2 * r >= full) r = cap;
+  }
+  return out;
+}
+
 }  // namespace
 
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape,
@@ -289,92 +376,24 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
   }
   if (shape == MembraneShape::LevelPiece) return level_piece(grid, cx, c);
   if (shape == MembraneShape::NearbyPinch) return nearby_pinch(grid, cx, c);
-  const double h = grid.voxel_size;
-  const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
-  int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
-  int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
-  const auto sc = cx.coords(c.saddle);
-  out.note = "the membrane did not close near the choke";
-  for (int attempt = 0; attempt < 16; ++attempt) {
-    detail::FloodBox box;
-    const auto outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box,
-                                                 bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
-    bool grow = outcome == detail::FloodOutcome::Grow;
-    if (outcome == detail::FloodOutcome::Shrink) {
-      if (seed_r <= 1) break;
-      seed_r = seed_r * 2 / 3;
-      continue;
-    }
-    if (outcome == detail::FloodOutcome::Flooded && shape == MembraneShape::Plane) {
-      const Sheet s = plane_piece(box, grid, sc, out.shore);
-      if (s == Sheet::AtGridBorder) {
-        out.note = "the cut plane reaches the side of the grid";
-        out.shore.clear();
-        break;
-      }
-      grow = s == Sheet::Open;
-      if (!grow) {
-        out.found = !out.shore.empty();
-        out.box_radius = r;
-        if (out.found) out.note.clear();
-        return out;
-      }
-    } else if (outcome == detail::FloodOutcome::Flooded) {
-      const std::int64_t start = start_of_sheet(box, {sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]});
-      if (start < 0) {
-        out.note = "the two zones of the membrane flood never met";
-        break;
-      }
-      std::vector<std::uint32_t> sheet;
-      const Sheet s = collect_sheet(box, grid, std::uint32_t(start), [&](std::uint32_t li) { return box.in_contact(li); }, sheet);
-      if (s == Sheet::AtGridBorder) {
-        out.note = "the membrane reaches the side of the grid: it is not a disc bounded by the surface";
-        break;
-      }
-      grow = s == Sheet::Open;
-      if (!grow) {
-        // Either shore alone separates the zones (every path from one to the other steps from a shore vertex
-        // of the first to one of the second): the smaller changes fewer voxels.
-        std::array<std::vector<std::uint32_t>, 2> shores;
-        for (std::uint32_t li : sheet) shores[box.zone(li) == 1 ? 0 : 1].push_back(li);
-        const int pick = shores[1].size() < shores[0].size() ? 1 : 0;
-        add_debris(box, grid, shores[pick]);
-        out.shore.clear();
-        for (std::uint32_t li : shores[pick]) out.shore.push_back(box.global(li));
-        std::sort(out.shore.begin(), out.shore.end());
-        out.found = !out.shore.empty();
-        out.box_radius = r;
-        if (out.found) out.note.clear();
-        return out;
-      }
-    }
-    if (grow) {
-      const int cap = options.max_box_radius > 0 ? std::min(full, options.max_box_radius) : full;
-      if (r >= cap) break;
-      r = std::min(cap, int(std::ceil(r * 1.8)));
-      if (2 * r >= full) r = cap;
-    }
-  }
-  return out;
+  const std::size_t k = shape == MembraneShape::Plane ? 1 : 0;
+  std::array<bool, 2> wanted{k == 0, k == 1};
+  SheetAndPlane both = sheet_and_plane(grid, cx, c, options, bounds, wanted, int(k));
+  if (both.failure) std::rethrow_exception(both.failure);
+  return std::move(both.membrane[k]);
 }
 
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
                                        MembraneShape first, bool saddle_alone, const std::array<RegionBounds, 2>* bounds) {
   const bool sub_voxel = saddle_alone && choke.depth < 0.5 * grid.voxel_size;
-  const MembraneShape other = first == MembraneShape::Plane ? MembraneShape::Sheet : MembraneShape::Plane;
-  std::vector<MembraneShape> order{first, other};
-  if (sub_voxel) order.insert(order.begin(), MembraneShape::Saddle);
-  MembraneVoxels m;
-  for (MembraneShape s : order) {
-    try {
-      m = membrane_voxels(grid, choke, options, s, bounds);
-    } catch (const Error& e) {
-      m = MembraneVoxels{};
-      m.note = e.what();
-    }
-    if (m.found) break;
+  if (sub_voxel) {
+    MembraneVoxels m = membrane_voxels(grid, choke, options, MembraneShape::Saddle, bounds);
+    if (m.found) return m;
   }
-  return m;
+  // Both shapes from one sequence of floods: `first` if it closes, else the other (closed or not, with its note).
+  const std::size_t k = first == MembraneShape::Plane ? 1 : 0;
+  SheetAndPlane both = sheet_and_plane(grid, FreudenthalComplex(grid.dims), choke, options, bounds, {true, true}, int(k));
+  return std::move(both.membrane[both.membrane[k].found ? k : 1 - k]);
 }
 
 }  // namespace chokeloops
