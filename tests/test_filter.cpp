@@ -285,6 +285,33 @@ TEST(MembraneVoxels, ClippedToTheRegionTheyAreTheSame) {
   EXPECT_GE(with_more_than_a_voxel, 4);
 }
 
+// closing_membrane_voxels reads the sheet and the plane from one sequence of floods: what it gives is what each
+// shape gives alone, the first shape when it closes and else the other, note for note.
+TEST(MembraneVoxels, TheShapesFloodedTogetherAreTheShapesAlone) {
+  std::vector<ScalarGrid> grids{sample_field({96, 96, 96}, torus_with_bar()), sample_field({96, 96, 96}, drilled_ball(0.05)),
+                                sample_field({80, 80, 80}, analytic::tangle_cube())};
+  add_uniform_noise(grids[2], 0.25 * grids[2].voxel_size, 7);
+  int compared = 0, first_open = 0;
+  for (const ScalarGrid& g : grids) {
+    const auto bounds = region_bounds(g);
+    const ChokeSet set = find_chokes(g, lower_star_persistence(g), ChokeParameters{});
+    for (const Choke& c : set.chokes)
+      for (MembraneShape first : {MembraneShape::Sheet, MembraneShape::Plane}) {
+        const MembraneShape other = first == MembraneShape::Sheet ? MembraneShape::Plane : MembraneShape::Sheet;
+        MembraneVoxels alone = membrane_voxels(g, c, {}, first, &bounds);
+        if (!alone.found) alone = membrane_voxels(g, c, {}, other, &bounds), ++first_open;
+        const MembraneVoxels together = closing_membrane_voxels(g, c, {}, first, false, &bounds);
+        EXPECT_EQ(together.found, alone.found);
+        EXPECT_EQ(together.shore, alone.shore);
+        EXPECT_EQ(together.box_radius, alone.box_radius);
+        EXPECT_EQ(together.note, alone.note);
+        ++compared;
+      }
+  }
+  EXPECT_GE(compared, 20);
+  EXPECT_GE(first_open, 1);  // the other shape's part of the shared floods is checked too
+}
+
 // Each side's bounds hold every vertex of its region and its neighbours, and nothing more.
 TEST(MembraneVoxels, RegionBoundsAreTheRegionsBoxAndOneVoxel) {
   const ScalarGrid g = sample_field({64, 64, 64}, drilled_ball(0.05));
