@@ -152,10 +152,9 @@ class LoopTracer {
           try_sections())
         break;
       const bool contractible = a == Attempt::GrowContractible;
-      // Where the curves were essential but linked a cycle of the other side, the flood by distance (meant
-      // for a flat core, whose curves are all contractible) rarely helps: on the pierced block it found no
-      // loop for any of the 28 generators that met one, and cost a flood of their biggest box each. The
-      // sections come first there; the flood by distance only if none of them is the loop.
+      // Where the curves were essential but linked a cycle of the other side, the flood by distance is meant
+      // for something else (a flat core, whose curves are all contractible): the sections come first there,
+      // and the flood by distance only if none of them is the loop (on the pierced block this changed no loop).
       if (contractible && check.rejected && !sections_tried && check.other_side && try_sections()) break;
       if (contractible) {
         only_contractible = true;
