@@ -256,13 +256,21 @@ TEST(Filter, ImpossibleRequestsAreRefused) {
   EXPECT_EQ(g.values, before.values);
 }
 
+namespace {
+// Clean shapes and a noisy one whose membranes take specks along (add_debris).
+std::vector<ScalarGrid> membrane_test_grids() {
+  std::vector<ScalarGrid> grids{sample_field({96, 96, 96}, torus_with_bar()), sample_field({96, 96, 96}, drilled_ball(0.05)),
+                                sample_field({80, 80, 80}, analytic::tangle_cube())};
+  add_uniform_noise(grids[2], 0.25 * grids[2].voxel_size, 7);
+  return grids;
+}
+}  // namespace
+
 // The label volumes clip each membrane's flood to its side's region (region_bounds): the same membranes,
 // shore for shore, as the flood over the whole box, on clean shapes and on a noisy one whose membranes take
 // specks along (add_debris).
 TEST(MembraneVoxels, ClippedToTheRegionTheyAreTheSame) {
-  std::vector<ScalarGrid> grids{sample_field({96, 96, 96}, torus_with_bar()), sample_field({96, 96, 96}, drilled_ball(0.05)),
-                                sample_field({80, 80, 80}, analytic::tangle_cube())};
-  add_uniform_noise(grids[2], 0.25 * grids[2].voxel_size, 7);
+  const std::vector<ScalarGrid> grids = membrane_test_grids();
   int compared = 0, with_more_than_a_voxel = 0;
   for (const ScalarGrid& g : grids) {
     const auto bounds = region_bounds(g);
@@ -288,9 +296,7 @@ TEST(MembraneVoxels, ClippedToTheRegionTheyAreTheSame) {
 // closing_membrane_voxels reads the sheet and the plane from one sequence of floods: what it gives is what each
 // shape gives alone, the first shape when it closes and else the other, note for note.
 TEST(MembraneVoxels, TheShapesFloodedTogetherAreTheShapesAlone) {
-  std::vector<ScalarGrid> grids{sample_field({96, 96, 96}, torus_with_bar()), sample_field({96, 96, 96}, drilled_ball(0.05)),
-                                sample_field({80, 80, 80}, analytic::tangle_cube())};
-  add_uniform_noise(grids[2], 0.25 * grids[2].voxel_size, 7);
+  const std::vector<ScalarGrid> grids = membrane_test_grids();
   int compared = 0, first_open = 0;
   for (const ScalarGrid& g : grids) {
     const auto bounds = region_bounds(g);
