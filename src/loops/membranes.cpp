@@ -259,12 +259,10 @@ class LoopTracer {
  private:
   // The grid vertices the box around `saddle` holds within the side's bounds (what its flood reads).
   double box_voxels(const detail::BoxExtent& box, const std::array<int, 3>& saddle, const detail::RegionBounds& bounds) const {
+    std::array<int, 3> lo, hi;
+    detail::flood_box_range(box, saddle, g_.dims, &bounds, lo, hi);
     double voxels = 1;
-    for (int a = 0; a < 3; ++a) {
-      const int lo = std::max({0, saddle[a] - box.below[a], bounds.lo[a]});
-      const int hi = std::min({g_.dims[a] - 1, saddle[a] + box.above[a], bounds.hi[a]});
-      voxels *= std::max(0, hi - lo + 1);
-    }
+    for (int a = 0; a < 3; ++a) voxels *= std::max(0, hi[a] - lo[a] + 1);
     return voxels;
   }
 

@@ -424,11 +424,11 @@ class RaySection {
     if (cg.edge[0] != entry && cg.edge[1] != entry) return fallback = true, false;
     return true;
   }
-  // A face of a curve, with its cut edges in section_of's order and the edges the walk entered and left it by.
+  // A face of a curve, with its cut edges in section_of's order and the edge the walk left it by.
   struct Step {
     int face;
     Cut cut;
-    int entry, exit;
+    int exit;
   };
   // The curve through seed face f: marks its faces seen; when it closes, `walk` holds its faces in turn (from
   // f, leaving by its second cut edge) and `first` the place of its first face in near_plane's order.
@@ -436,7 +436,7 @@ class RaySection {
     Cut c0;
     cut_of(f, c0);
     seen.emplace(f, 0);
-    walk.assign(1, Step{f, c0, c0.edge[0], c0.edge[1]});
+    walk.assign(1, Step{f, c0, c0.edge[1]});
     first = 0;
     const std::size_t limit = S_.faces.size() + 1;
     for (int dir = 1; dir >= 0; --dir) {
@@ -453,7 +453,7 @@ class RaySection {
         if (steps > limit || !seen.emplace(h, 0)) return false;  // not a simple curve: leave it to section_of
         e = ch.edge[0] == entry ? ch.edge[1] : ch.edge[0];
         if (dir == 1) {
-          walk.push_back(Step{h, ch, entry, e});
+          walk.push_back(Step{h, ch, e});
           if (ch.key < walk[first].cut.key) first = walk.size() - 1;
         }
         g = h;

@@ -22,10 +22,8 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   auto& lo = box.lo;
   auto& hi = box.hi;
   auto& n = box.n;
+  flood_box_range(extent, sc, grid.dims, bounds, lo, hi);
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(0, sc[a] - extent.below[a]);
-    hi[a] = std::min(grid.dims[a] - 1, sc[a] + extent.above[a]);
-    if (bounds) lo[a] = std::max(lo[a], bounds->lo[a]), hi[a] = std::min(hi[a], bounds->hi[a]);
     if (hi[a] < lo[a]) return FloodOutcome::Grow;  // the saddle's region is empty here: no lobe to flood
     n[a] = hi[a] - lo[a] + 1;
   }

@@ -66,6 +66,17 @@ struct BoxExtent {
   int smallest() const { return std::min({below[0], below[1], below[2], above[0], above[1], above[2]}); }
 };
 
+// The grid box (inclusive) that a flood of `extent` around `saddle` reads: clipped to the grid, and to
+// `bounds` when given. Some hi[a] < lo[a] where the box holds none of the region.
+inline void flood_box_range(const BoxExtent& extent, const std::array<int, 3>& saddle, const std::array<int, 3>& dims,
+                            const RegionBounds* bounds, std::array<int, 3>& lo, std::array<int, 3>& hi) {
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(0, saddle[a] - extent.below[a]);
+    hi[a] = std::min(dims[a] - 1, saddle[a] + extent.above[a]);
+    if (bounds) lo[a] = std::max(lo[a], bounds->lo[a]), hi[a] = std::min(hi[a], bounds->hi[a]);
+  }
+}
+
 // Floods the box of half-size `r` around the choke's saddle, clipped to `bounds` when given (the choke's side's
 // region_bounds); the seed pieces are looked for within `seed_radius` of it. by_distance: grow the zones by
 // steps from the seeds (their bisector) instead of in filtration order. Throws Error when the choke is too
