@@ -105,3 +105,82 @@ TEST(Linking, TorusCycleThroughTheHoleLeavesATightGrid) {
   // around the tube that stays farther from the surface than the hole's radius 0.2.
   expect_torus_cycles({73, 73, 33}, {0.05, 0.05, 0.3}, {0.95, 0.95, 0.7}, true);
 }
+
+namespace {
+// Twice the linking number from every pair of segments, no cells: the count LinkingCurve's grid must give.
+// Along the first direction LinkingCurve tries; nullopt at a degenerate crossing.
+std::optional<long> all_pairs_crossing_sum(const Polyline3& a, const Polyline3& b) {
+  const double d0[3] = {0.5712, 0.4233, 0.7033};
+  const double dn = std::sqrt(d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]);
+  const double d[3] = {d0[0] / dn, d0[1] / dn, d0[2] / dn};
+  double u[3] = {d[1], -d[0], 0};
+  const double un = std::hypot(u[0], u[1]);
+  u[0] /= un, u[1] /= un;
+  const double w[3] = {d[1] * u[2] - d[2] * u[1], d[2] * u[0] - d[0] * u[2], d[0] * u[1] - d[1] * u[0]};
+  auto project = [&](const std::array<double, 3>& p) {
+    return std::array<double, 3>{p[0] * u[0] + p[1] * u[1] + p[2] * u[2], p[0] * w[0] + p[1] * w[1] + p[2] * w[2],
+                                 p[0] * d[0] + p[1] * d[1] + p[2] * d[2]};
+  };
+  long sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const auto p = project(a[i]), p2 = project(a[(i + 1) % a.size()]);
+      const auto q = project(b[j]), q2 = project(b[(j + 1) % b.size()]);
+      const double rx = p2[0] - p[0], ry = p2[1] - p[1], sx = q2[0] - q[0], sy = q2[1] - q[1];
+      const double denom = rx * sy - ry * sx;
+      if (std::abs(denom) < 1e-12) continue;
+      const double wx = q[0] - p[0], wy = q[1] - p[1];
+      const double t = (wx * sy - wy * sx) / denom, s = (wx * ry - wy * rx) / denom;
+      if (t < 0 || t > 1 || s < 0 || s > 1) continue;
+      if (t < 1e-9 || t > 1 - 1e-9 || s < 1e-9 || s > 1 - 1e-9) return std::nullopt;
+      const double ha = p[2] + t * (p2[2] - p[2]), hb = q[2] + s * (q2[2] - q[2]);
+      sum += (ha > hb ? 1 : -1) * (denom > 0 ? 1 : -1);
+    }
+  return sum;
+}
+}  // namespace
+
+// One curve prepared once and asked against many: the same numbers as a count over every pair of segments,
+// for a long wavy curve (many cells, segments spanning several) against circles and torus curves that link it
+// 0, 1 or 2 times, cross its cells in every way, or lie apart from it.
+TEST(Linking, PreparedCurveCountsEveryCrossingOnce) {
+  // A (1, 2) torus curve of 2000 points, wobbling: long against the cells, like a generator's loop.
+  Polyline3 long_curve = torus_curve(1, 2, 2, 0.7, 0, 2000);
+  for (std::size_t i = 0; i < long_curve.size(); ++i) long_curve[i][2] += 0.05 * std::sin(37.0 * 2 * kPi * double(i) / 2000);
+  const LinkingCurve prepared(long_curve);
+  std::vector<Polyline3> others;
+  others.push_back(circle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 2, 300));        // the core: links twice
+  others.push_back(circle({2, 0, 0}, {1, 0, 0}, {0, 0, 1}, 1.2, 50));       // a wide meridian: links once
+  others.push_back(circle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 0.5, 7));        // in the hole, coarse: not linked
+  others.push_back(circle({6, 0, 0}, {0, 1, 0}, {0, 0, 1}, 1, 64));         // apart
+  others.push_back(circle({0, 0, 2}, {1, 0, 0}, {0, 1, 0}, 4, 9));          // above, long segments over many cells
+  others.push_back(torus_curve(1, 2, 2, 0.7, kPi, 333));                    // the same torus, half a turn on: twice
+  others.push_back(torus_curve(1, 1, 2, 1.3, 0.3, 41));                     // a coarse wider torus curve
+  int linked = 0;
+  for (const Polyline3& b : others) {
+    const auto expected = all_pairs_crossing_sum(long_curve, b);
+    ASSERT_TRUE(expected.has_value());
+    ASSERT_EQ(*expected % 2, 0);
+    const auto got = prepared.with(b);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(*got, *expected / 2);
+    EXPECT_EQ(got, linking_number(long_curve, b));
+    EXPECT_EQ(got, linking_number(b, long_curve));
+    linked += *got != 0;
+  }
+  EXPECT_EQ(std::abs(*prepared.with(others[0])), 2);
+  EXPECT_EQ(std::abs(*prepared.with(others[1])), 1);
+  EXPECT_EQ(*prepared.with(others[3]), 0);
+  EXPECT_GE(linked, 3);
+  // Coarse curves on both sides: a pair of long segments shares several cells and is still counted once.
+  const Polyline3 coarse_core = circle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, 2, 9);
+  const LinkingCurve coarse(coarse_core);
+  for (const Polyline3& b : {circle({1.9, 0.3, 0}, {1, 0, 0}, {0, 0, 1}, 1.0, 5), circle({-1.9, 0.2, 0}, {0, 1, 0}, {0, 0.3, 1}, 1.1, 6),
+                             torus_curve(1, 3, 2, 0.8, 0.2, 31), circle({0.1, 0, 0.4}, {1, 0, 0}, {0, 1, 0}, 3, 11)}) {
+    const auto expected = all_pairs_crossing_sum(coarse_core, b);
+    ASSERT_TRUE(expected.has_value());
+    ASSERT_EQ(*expected % 2, 0);
+    EXPECT_EQ(coarse.with(b), std::optional<int>(int(*expected / 2)));
+  }
+  EXPECT_EQ(std::abs(*coarse.with(torus_curve(1, 3, 2, 0.8, 0.2, 31))), 3);
+}

@@ -61,10 +61,11 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
 
 int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles) {
   const Box box = box_of(curve);
+  const LinkingCurve linking(curve);
   for (std::size_t k = 0; k < cycles.size(); ++k) {
     const SideCycle& z = *cycles[k];
     if (apart(box, z)) continue;
-    const auto lk = linking_number(curve, z.points);
+    const auto lk = linking.with(z.points);
     if (lk && *lk != 0) return int(k);
   }
   return -1;
@@ -168,10 +169,11 @@ bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& 
     tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t r) {
       const Polyline3& curve = loops[order[r]].points;
       const Box box = box_of(curve);
+      const LinkingCurve linking(curve);
       for (std::size_t k = 0; k < own_side.size(); ++k) {
         const SideCycle& z = *own_side[k];
         if (apart(box, z)) continue;
-        const auto lk = linking_number(curve, z.points);
+        const auto lk = linking.with(z.points);
         if (lk && (*lk & 1)) rows[r][k / 64] |= std::uint64_t(1) << (k % 64);
       }
     });

@@ -15,37 +15,87 @@ namespace chokeloops {
 
 namespace {
 
-struct Projected { double x, y, h; };
+// Generic directions, tried in turn until no crossing is degenerate.
+constexpr double kDirections[4][3] = {{0.5712, 0.4233, 0.7033}, {-0.3107, 0.8422, 0.4407}, {0.7741, -0.2213, 0.5930},
+                                      {0.1379, 0.2917, -0.9465}};
 
-// Sum over the crossings of the two projected polylines of (+1 when `a` passes over `b`, -1 under) times
-// the crossing's orientation: twice the linking number. nullopt when a crossing is degenerate in this view.
-std::optional<long> crossing_sum(const std::vector<Projected>& a, const std::vector<Projected>& b) {
-  const std::size_t na = a.size(), nb = b.size();
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (const auto& p : b) x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-  const double span = std::max({x1 - x0, y1 - y0, 1e-300});
-  // A uniform grid of b's segments: each crossing is counted in the one cell that holds its point.
-  const int k = std::clamp(int(std::sqrt(double(nb))), 1, 1024);
-  const double cell = span / k * (1 + 1e-9);
-  auto cell_of = [&](double v, double origin) { return std::clamp(int(std::floor((v - origin) / cell)), 0, k - 1); };
-  std::vector<std::vector<std::uint32_t>> bins(std::size_t(k) * k);
-  for (std::size_t j = 0; j < nb; ++j) {
-    const auto &p = b[j], &q = b[(j + 1) % nb];
-    for (int cy = cell_of(std::min(p.y, q.y), y0); cy <= cell_of(std::max(p.y, q.y), y0); ++cy)
-      for (int cx = cell_of(std::min(p.x, q.x), x0); cx <= cell_of(std::max(p.x, q.x), x0); ++cx)
-        bins[std::size_t(cy) * k + cx].push_back(std::uint32_t(j));
+// The view along direction `dir`: u, w span its plane (u x w = d, so crossings keep one orientation), d is
+// the height.
+struct ViewFrame {
+  double u[3], w[3], d[3];
+  explicit ViewFrame(int dir) {
+    const double* d0 = kDirections[dir];
+    const double dn = std::sqrt(d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]);
+    for (int a = 0; a < 3; ++a) d[a] = d0[a] / dn;
+    u[0] = d[1], u[1] = -d[0], u[2] = 0;
+    const double un = std::hypot(u[0], u[1]);
+    u[0] /= un, u[1] /= un;
+    w[0] = d[1] * u[2] - d[2] * u[1], w[1] = d[2] * u[0] - d[0] * u[2], w[2] = d[0] * u[1] - d[1] * u[0];
   }
+  LinkingCurve::Point project(const std::array<double, 3>& p) const {
+    return {p[0] * u[0] + p[1] * u[1] + p[2] * u[2], p[0] * w[0] + p[1] * w[1] + p[2] * w[2], p[0] * d[0] + p[1] * d[1] + p[2] * d[2]};
+  }
+};
+
+}  // namespace
+
+LinkingCurve::LinkingCurve(const Polyline3& curve) : curve_(curve) {}
+LinkingCurve::~LinkingCurve() = default;
+
+const LinkingCurve::View& LinkingCurve::view(int dir) const {
+  std::unique_ptr<View>& v = views_[std::size_t(dir)];
+  if (v) return *v;
+  v = std::make_unique<View>();
+  const ViewFrame frame(dir);
+  const std::size_t n = curve_.size();
+  v->points.resize(n);
+  for (std::size_t i = 0; i < n; ++i) v->points[i] = frame.project(curve_[i]);
+  for (const Point& p : v->points)
+    v->x0 = std::min(v->x0, p.x), v->y0 = std::min(v->y0, p.y), v->x1 = std::max(v->x1, p.x), v->y1 = std::max(v->y1, p.y);
+  const double span = std::max({v->x1 - v->x0, v->y1 - v->y0, 1e-300});
+  v->span = span;
+  v->k = std::clamp(int(std::sqrt(double(n))), 1, 1024);
+  v->cell = span / v->k * (1 + 1e-9);
+  // Segments bucketed by the cells their boxes cover, in a counting pass (one array, not a vector per cell).
+  const std::size_t cells = std::size_t(v->k) * std::size_t(v->k);
+  v->start.assign(cells + 1, 0);
+  auto for_cells = [&](std::size_t j, auto&& fn) {
+    const Point &p = v->points[j], &q = v->points[(j + 1) % n];
+    const int cx0 = v->cell_x(std::min(p.x, q.x)), cx1 = v->cell_x(std::max(p.x, q.x));
+    const int cy0 = v->cell_y(std::min(p.y, q.y)), cy1 = v->cell_y(std::max(p.y, q.y));
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx) fn(std::size_t(cy) * std::size_t(v->k) + std::size_t(cx));
+  };
+  for (std::size_t j = 0; j < n; ++j) for_cells(j, [&](std::size_t c) { ++v->start[c + 1]; });
+  for (std::size_t c = 0; c < cells; ++c) v->start[c + 1] += v->start[c];
+  v->segments.resize(v->start[cells]);
+  std::vector<std::uint32_t> fill(v->start.begin(), v->start.end() - 1);
+  for (std::size_t j = 0; j < n; ++j) for_cells(j, [&](std::size_t c) { v->segments[fill[c]++] = std::uint32_t(j); });
+  return *v;
+}
+
+std::optional<long> LinkingCurve::crossing_sum(const View& a, const std::vector<Point>& b) const {
+  // Sum over the crossings of the two projected polylines of (+1 when this curve passes over `b`, -1 under)
+  // times the crossing's orientation: twice the linking number. nullopt when a crossing is degenerate in
+  // this view. Each pair of segments whose boxes share cells is met once per shared cell and counted in the
+  // first of them (the lowest row, then column, of the two cell ranges' overlap).
+  const std::size_t na = a.points.size(), nb = b.size();
+  const double span = a.span;
   constexpr double eps = 1e-9;
   long sum = 0;
-  for (std::size_t i = 0; i < na; ++i) {
-    const auto &p = a[i], &p2 = a[(i + 1) % na];
-    if (std::max(p.x, p2.x) < x0 || std::min(p.x, p2.x) > x1 || std::max(p.y, p2.y) < y0 || std::min(p.y, p2.y) > y1) continue;
-    const double rx = p2.x - p.x, ry = p2.y - p.y;
-    for (int cy = cell_of(std::min(p.y, p2.y), y0); cy <= cell_of(std::max(p.y, p2.y), y0); ++cy)
-      for (int cx = cell_of(std::min(p.x, p2.x), x0); cx <= cell_of(std::max(p.x, p2.x), x0); ++cx)
-        for (std::uint32_t j : bins[std::size_t(cy) * k + cx]) {
-          const auto &q = b[j], &q2 = b[(j + 1) % nb];
-          const double sx = q2.x - q.x, sy = q2.y - q.y;
+  for (std::size_t i = 0; i < nb; ++i) {
+    const Point &q = b[i], &q2 = b[(i + 1) % nb];
+    if (std::max(q.x, q2.x) < a.x0 || std::min(q.x, q2.x) > a.x1 || std::max(q.y, q2.y) < a.y0 || std::min(q.y, q2.y) > a.y1) continue;
+    const double sx = q2.x - q.x, sy = q2.y - q.y;
+    const int bx0 = a.cell_x(std::min(q.x, q2.x)), bx1 = a.cell_x(std::max(q.x, q2.x));
+    const int by0 = a.cell_y(std::min(q.y, q2.y)), by1 = a.cell_y(std::max(q.y, q2.y));
+    for (int cy = by0; cy <= by1; ++cy)
+      for (int cx = bx0; cx <= bx1; ++cx) {
+        const std::size_t c = std::size_t(cy) * std::size_t(a.k) + std::size_t(cx);
+        for (std::uint32_t s = a.start[c]; s < a.start[c + 1]; ++s) {
+          const std::size_t j = a.segments[s];
+          const Point &p = a.points[j], &p2 = a.points[(j + 1) % na];
+          const double rx = p2.x - p.x, ry = p2.y - p.y;
           const double denom = rx * sy - ry * sx;
           const double wx = q.x - p.x, wy = q.y - p.y;
           const double scale = std::sqrt((rx * rx + ry * ry) * (sx * sx + sy * sy));
@@ -58,48 +108,33 @@ std::optional<long> crossing_sum(const std::vector<Projected>& a, const std::vec
             }
             continue;
           }
-          const double t = (wx * sy - wy * sx) / denom, s = (wx * ry - wy * rx) / denom;
-          if (t < -eps || t > 1 + eps || s < -eps || s > 1 + eps) continue;
-          if (t < eps || t > 1 - eps || s < eps || s > 1 - eps) return std::nullopt;  // through a vertex
-          const double ix = p.x + t * rx, iy = p.y + t * ry;
-          if (cell_of(ix, x0) != cx || cell_of(iy, y0) != cy) continue;  // counted in its own cell
-          const double ha = p.h + t * (p2.h - p.h), hb = q.h + s * (q2.h - q.h);
+          const double t = (wx * sy - wy * sx) / denom, u = (wx * ry - wy * rx) / denom;
+          if (t < -eps || t > 1 + eps || u < -eps || u > 1 + eps) continue;
+          if (t < eps || t > 1 - eps || u < eps || u > 1 - eps) return std::nullopt;  // through a vertex
+          const int ax0 = a.cell_x(std::min(p.x, p2.x)), ay0 = a.cell_y(std::min(p.y, p2.y));
+          if (cx != std::max(ax0, bx0) || cy != std::max(ay0, by0)) continue;  // counted in the first shared cell
+          const double ha = p.h + t * (p2.h - p.h), hb = q.h + u * (q2.h - q.h);
           if (std::abs(ha - hb) <= 1e-9 * span) return std::nullopt;  // the curves (nearly) meet
           sum += (ha > hb ? 1 : -1) * (denom > 0 ? 1 : -1);
         }
+      }
   }
   return sum;
 }
 
-}  // namespace
-
-std::optional<int> linking_number(const Polyline3& a, const Polyline3& b) {
-  if (a.size() < 3 || b.size() < 3) return 0;
-  // Generic directions, tried in turn until no crossing is degenerate.
-  static const double dirs[4][3] = {{0.5712, 0.4233, 0.7033}, {-0.3107, 0.8422, 0.4407}, {0.7741, -0.2213, 0.5930},
-                                    {0.1379, 0.2917, -0.9465}};
-  for (const auto& d0 : dirs) {
-    const double dn = std::sqrt(d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]);
-    const double d[3] = {d0[0] / dn, d0[1] / dn, d0[2] / dn};
-    // u, w: an orthonormal basis of the view plane (u x w = d, so crossings keep one orientation).
-    double u[3] = {d[1], -d[0], 0};
-    const double un = std::hypot(u[0], u[1]);
-    u[0] /= un, u[1] /= un;
-    const double w[3] = {d[1] * u[2] - d[2] * u[1], d[2] * u[0] - d[0] * u[2], d[0] * u[1] - d[1] * u[0]};
-    auto project = [&](const Polyline3& c) {
-      std::vector<Projected> out(c.size());
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        const auto& p = c[i];
-        out[i] = {p[0] * u[0] + p[1] * u[1] + p[2] * u[2], p[0] * w[0] + p[1] * w[1] + p[2] * w[2],
-                  p[0] * d[0] + p[1] * d[1] + p[2] * d[2]};
-      }
-      return out;
-    };
-    const auto sum = crossing_sum(project(a), project(b));
+std::optional<int> LinkingCurve::with(const Polyline3& other) const {
+  if (curve_.size() < 3 || other.size() < 3) return 0;
+  std::vector<Point> b(other.size());
+  for (int dir = 0; dir < 4; ++dir) {
+    const ViewFrame frame(dir);
+    for (std::size_t i = 0; i < other.size(); ++i) b[i] = frame.project(other[i]);
+    const auto sum = crossing_sum(view(dir), b);
     if (sum && *sum % 2 == 0) return int(*sum / 2);
   }
   return std::nullopt;
 }
+
+std::optional<int> linking_number(const Polyline3& a, const Polyline3& b) { return LinkingCurve(a).with(b); }
 
 namespace {
 
