@@ -134,7 +134,16 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
     const int k = int(li / lz), rest = int(li % lz);
     return node_at({rest % n[0], rest / n[0], k});
   };
-  std::vector<std::vector<std::uint32_t>> buckets(last_bucket + 1);
+  // The level queue's buckets are the thread's, kept between floods with their storage (a small box's flood
+  // fills a few hundred buckets of a few dozen vertices each, and growing each from nothing cost a third of its
+  // time): an emptied bucket keeps its storage when it is small and the kept ones hold at most kKeptEntries
+  // in all, else it is freed, so that a big flood's memory goes as it empties, as it did when none was kept.
+  constexpr std::size_t kKeptEntries = std::size_t(1) << 20, kKeptPerBucket = std::size_t(1) << 12;
+  std::size_t retained = 0;
+  static thread_local std::vector<std::vector<std::uint32_t>> buckets;
+  std::size_t used = last_bucket + 1;  // buckets 0 .. used - 1 are this flood's
+  if (buckets.size() < used) buckets.resize(used);
+  for (std::size_t b = 0; b < used; ++b) buckets[b].clear();
   for (const Node& x : seeds) buckets[0].push_back(x.li);
   // Vertices off the box's border visit their 14 neighbours by fixed local offsets, without decoding
   // coordinates or checking bounds; the border bit sends the others down the checked path. Same
@@ -165,7 +174,7 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   contact.assign(cell.size(), 0);
   box.contact = &contact;
   std::vector<std::uint32_t> shore_local;
-  for (std::size_t b = 0; b < buckets.size(); ++b) {
+  for (std::size_t b = 0; b < used; ++b) {
     for (std::size_t q = 0; q < buckets[b].size(); ++q) {
       // The flood waits on its cells' cache misses (perf: half its time on one load): ask for the cells
       // around a vertex a few places ahead in the queue (its neighbours' rows) while this one is visited.
@@ -186,7 +195,10 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
           if (!by_distance) {
             buckets[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
           } else {
-            if (b + 1 == buckets.size()) buckets.emplace_back();
+            if (b + 1 == used) {
+              if (used == buckets.size()) buckets.emplace_back();
+              buckets[used++].clear();
+            }
             buckets[b + 1].push_back(ul);
           }
         }
@@ -198,7 +210,21 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
       }
       if (at_shore) shore_local.push_back(xl);
     }
-    std::vector<std::uint32_t>().swap(buckets[b]);
+    const std::size_t capacity = buckets[b].capacity();
+    if (capacity <= kKeptPerBucket && retained + capacity <= kKeptEntries) {
+      retained += capacity;
+      buckets[b].clear();
+    } else {
+      std::vector<std::uint32_t>().swap(buckets[b]);
+    }
+  }
+  {
+    std::size_t kept = 0;
+    for (const auto& bucket : buckets) kept += bucket.capacity();
+    for (std::size_t b = buckets.size(); b-- > 0 && kept > kKeptEntries;) {
+      kept -= buckets[b].capacity();
+      std::vector<std::uint32_t>().swap(buckets[b]);
+    }
   }
   for (int side = 0; side < 2; ++side)
     for (int a = 0; a < 3; ++a) box.seed_centroid[side][a] /= double(std::max<std::size_t>(1, box.seed_count[side]));
