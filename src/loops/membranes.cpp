@@ -131,7 +131,7 @@ class LoopTracer {
       Attempt a = try_box(c, box, seed_r, false, raw, raw_path, check, open_sides);
       const int r = box.largest();
       if (debug_)
-        std::fprintf(stderr, "membranes: %s %s depth %g box %d (%d %d %d / %d %d %d) seed %d: attempt %d, %.0f ms\n", to_string(c.side),
+        std::fprintf(stderr, "membranes: %s %s depth %g box %d (%d %d %d / %d %d %d) seed %d: attempt %d, %.2f ms\n", to_string(c.side),
                      to_string(c.kind), c.depth, r, box.below[0], box.below[1], box.below[2], box.above[0], box.above[1],
                      box.above[2], seed_r, int(a),
                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_box).count());
@@ -304,7 +304,12 @@ class LoopTracer {
     const bool handle = c.side == Side::Handle;
     auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
     detail::FloodBox box;
-    switch (detail::flood_two_lobes(g_, cx_, c, extent, seed_radius, by_distance, box, &bounds_[handle ? 0 : 1])) {
+    const auto t_flood = std::chrono::steady_clock::now();
+    const detail::FloodOutcome flooded = detail::flood_two_lobes(g_, cx_, c, extent, seed_radius, by_distance, box, &bounds_[handle ? 0 : 1]);
+    if (debug_)
+      std::fprintf(stderr, "membranes: %s %s depth %g box %d: flood of %zu voxels, %.3f ms\n", to_string(c.side), to_string(c.kind), c.depth, r,
+                   box.size(), std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_flood).count());
+    switch (flooded) {
       case detail::FloodOutcome::Grow: return Attempt::Grow;
       case detail::FloodOutcome::Shrink: return Attempt::Shrink;
       case detail::FloodOutcome::Flooded: break;
