@@ -415,9 +415,7 @@ FilterReport filter_grid(ScalarGrid& grid, const FilterOptions& options, const P
     };
     auto membrane_of = [&](const Choke& g, bool saddle_alone, MembraneShape shape) {
       LoopOptions lo = options.membrane;
-      const int base = int(std::ceil(lo.box_factor * g.depth / grid.voxel_size)) + lo.box_margin;
-      if (!wide_boxes) lo.max_box_radius = std::max(16, 4 * base);
-      else lo.max_box_radius = std::max(64, 16 * base);
+      lo.max_box_radius = membrane_box_cap(grid, g, lo, wide_boxes);
       return allowed(closing_membrane_voxels(grid, g, lo, shape, saddle_alone));
     };
     tbb::parallel_for(std::size_t(0), candidates.size() * 2, [&](std::size_t job) {

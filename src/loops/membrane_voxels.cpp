@@ -1,7 +1,10 @@
 #include "chokeloops/loops/membrane_voxels.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 
 #include "two_lobe_flood.h"
@@ -289,11 +292,17 @@ SheetAndPlane sheet_and_plane(const ScalarGrid& grid, const FreudenthalComplex& 
   int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
   int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
   const auto sc = cx.coords(c.saddle);
+  static const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
   for (int attempt = 0; attempt < 16 && (open[0] || open[1]); ++attempt) {
     detail::FloodBox box;
     detail::FloodOutcome outcome;
     try {
+      const auto t_flood = std::chrono::steady_clock::now();
       outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box, bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
+      if (debug)
+        std::fprintf(stderr, "membrane voxels: %s %s depth %g box %d: flood of %zu voxels, outcome %d, %.3f ms\n", to_string(c.side),
+                     to_string(c.kind), c.depth, r, box.size(), int(outcome),
+                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_flood).count());
     } catch (const Error& e) {
       out.failure = std::current_exception();
       for (int k = 0; k < 2; ++k)
@@ -381,6 +390,11 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
   SheetAndPlane both = sheet_and_plane(grid, cx, c, options, bounds, wanted, int(k));
   if (both.failure) std::rethrow_exception(both.failure);
   return std::move(both.membrane[k]);
+}
+
+int membrane_box_cap(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, bool wide) {
+  const int base = int(std::ceil(options.box_factor * choke.depth / grid.voxel_size)) + options.box_margin;
+  return wide ? std::max(64, 16 * base) : std::max(16, 4 * base);
 }
 
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,

@@ -114,11 +114,15 @@ LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image
     }
   }
   // The membranes: the voxels whose flip removes the loop's handle (cut, in the solid) or tunnel (fill, in the
-  // outside), as `chokeloops filter` would edit them. Each loop's own membrane, independent of the others.
+  // outside), as `chokeloops filter` would edit them: in boxes no wider than its widest (membrane_box_cap).
+  // Each loop's own membrane, independent of the others.
   std::vector<MembraneVoxels> shores(r.loops.size());
   const std::array<RegionBounds, 2> bounds = region_bounds(r.grid);
   tbb::parallel_for(std::size_t(0), r.loops.size(), [&](std::size_t i) {
-    if (r.loops[i].found) shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, {}, MembraneShape::Sheet, true, &bounds);
+    if (!r.loops[i].found) return;
+    LoopOptions lo;
+    lo.max_box_radius = membrane_box_cap(r.grid, r.loops[i].choke, lo, true);
+    shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, lo, MembraneShape::Sheet, true, &bounds);
   });
   const FreudenthalComplex cx(r.grid.dims);
   LoopVolumes out;

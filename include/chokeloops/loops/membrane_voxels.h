@@ -58,6 +58,12 @@ MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& chok
                                        MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true,
                                        const std::array<RegionBounds, 2>* bounds = nullptr);
 
+// The largest box half-size (voxels) a membrane of `choke` grows to where it must stay near it: a few times
+// the box its depth asks for (LoopOptions::box_factor, box_margin), at least 16 voxels; `wide`: 16 times
+// that box, at least 64 voxels. A sheet that closes only beyond that is not this choke's edit: on the
+// grey-matter map the membranes of sub-voxel tunnels that grew past it spread over the brain or never closed.
+int membrane_box_cap(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, bool wide);
+
 // Where no membrane removes the pair alone (it joins components, opens a cavity, or does not close): the
 // generator's side near the saddle thinned by simple points (a flip that changes neither side's topology),
 // nearest the surface first and no deeper than the choke (|f| <= depth + half a voxel), in a box of depth + 1
