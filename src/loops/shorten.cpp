@@ -109,15 +109,9 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   const bool distances = opt.max_move > 0;
   std::vector<double> dist;
   auto compute_distances = [&] {
-    // Each region vertex's neighbours in the region; a neighbour met twice across a non-manifold edge costs
-    // a repeated arc and nothing else.
-    std::vector<int> next_start{0}, next;
-    for (int v : region) {
-      adj.for_each_neighbour(mesh, v, [&](int w) {
-        if (const int* wi = rid.find(w)) next.push_back(*wi);
-      });
-      next_start.push_back(int(next.size()));
-    }
+    // Only the vertices within max_move are expanded, often a small part of the rings: their neighbours in
+    // the region are read as they are (a neighbour met twice across a non-manifold edge costs a repeated
+    // arc and nothing else).
     dist.assign(region.size(), std::numeric_limits<double>::infinity());
     using QE = std::pair<double, int>;
     std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
@@ -127,11 +121,12 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
       q.pop();
       if (d > dist[std::size_t(i)] || d > opt.max_move) continue;
       const auto& p = mesh.vertices[std::size_t(region[std::size_t(i)])];
-      for (int j = next_start[std::size_t(i)]; j < next_start[std::size_t(i) + 1]; ++j) {
-        const int wi = next[std::size_t(j)];
-        double nd = d + dist3(p, mesh.vertices[std::size_t(region[std::size_t(wi)])]);
-        if (nd < dist[std::size_t(wi)]) dist[std::size_t(wi)] = nd, q.push({nd, wi});
-      }
+      adj.for_each_neighbour(mesh, region[std::size_t(i)], [&](int w) {
+        const int* wi = rid.find(w);
+        if (!wi) return;
+        const double nd = d + dist3(p, mesh.vertices[std::size_t(w)]);
+        if (nd < dist[std::size_t(*wi)]) dist[std::size_t(*wi)] = nd, q.push({nd, *wi});
+      });
     }
   };
   if (distances && upper_max > opt.max_move) compute_distances();
