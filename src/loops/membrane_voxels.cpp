@@ -289,8 +289,8 @@ SheetAndPlane sheet_and_plane(const ScalarGrid& grid, const FreudenthalComplex& 
   for (auto& m : out.membrane) m.note = "the membrane did not close near the choke";
   const double h = grid.voxel_size;
   const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
-  int r = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
-  int seed_r = int(std::ceil(c.depth / h)) + options.box_margin;
+  int r = options.first_box_radius(c.depth, h);
+  int seed_r = options.seed_radius(c.depth, h);
   const auto sc = cx.coords(c.saddle);
   static const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
   for (int attempt = 0; attempt < 16 && (open[0] || open[1]); ++attempt) {
@@ -393,7 +393,7 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const Loo
 }
 
 int membrane_box_cap(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, bool wide) {
-  const int base = int(std::ceil(options.box_factor * choke.depth / grid.voxel_size)) + options.box_margin;
+  const int base = options.first_box_radius(choke.depth, grid.voxel_size);
   return wide ? std::max(64, 16 * base) : std::max(16, 4 * base);
 }
 

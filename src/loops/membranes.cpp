@@ -95,8 +95,8 @@ class LoopTracer {
     loop.choke = c;
     const double h = g_.voxel_size;
     const int full = std::max({g_.dims[0], g_.dims[1], g_.dims[2]});
-    const int r0 = int(std::ceil(options.box_factor * c.depth / h)) + options.box_margin;
-    const int seed_r0 = int(std::ceil(c.depth / h)) + options.box_margin;
+    const int r0 = options.first_box_radius(c.depth, h);
+    const int seed_r0 = options.seed_radius(c.depth, h);
     bool only_contractible = false;
     // A generator's loop must bound on its own side: it links no cycle of the other side (linking.h).
     CurveCheck check;

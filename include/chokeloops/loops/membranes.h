@@ -6,6 +6,7 @@
 // the flood grows them through the solid (the outside, for tunnels) in filtration order inside a local box
 // around the choke. The interface of the two zones is the membrane; where it meets the surface is the loop.
 // The loop is then shortened toward a local geodesic without leaving the choke's neighbourhood.
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,11 @@ struct LoopOptions {
   double box_factor = 1.5;   // local box half-size = box_factor * depth + box_margin voxels (grown on demand)
   int box_margin = 3;
   int max_box_radius = 0;    // voxels; 0: boxes grow up to the whole grid
+
+  // The first box's half-size around a choke of this depth, and the radius its seed pieces are looked for
+  // within, in voxels of size `voxel`: what the loop stage, the label volumes and the filter start from.
+  int first_box_radius(double depth, double voxel) const { return int(std::ceil(box_factor * depth / voxel)) + box_margin; }
+  int seed_radius(double depth, double voxel) const { return int(std::ceil(depth / voxel)) + box_margin; }
 };
 
 struct Loop {
