@@ -375,34 +375,44 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   // sum; an entry is current when its sum is the node's distance plus its bound, one addition of the same
   // two numbers (each vertex's bound is computed once a search), so the test is exact.
   const P3 target = position[std::size_t(s)];
+  // The loop below reads the band and the scratch through plain pointers: through the vectors (a
+  // thread_local's members) each read went back to the thread's block and the vector for its data pointer.
+  double* const dist = d.data();
+  int* const prev = from.data();
+  double* const bounds = scratch.bound.data();
+  const Arc* const arc = arcs.data();
+  const int* const first_arc = arc_start.data();
+  const P3* const at = position.data();
+  std::vector<int>& bounded = scratch.bounded;
   auto bound = [&](int v) {
-    double& b = scratch.bound[std::size_t(v)];
-    if (b < 0) b = dist3(position[std::size_t(v)], target), scratch.bounded.push_back(v);
+    double b = bounds[v];
+    if (b < 0) b = bounds[v] = dist3(at[v], target), bounded.push_back(v);
     return b;
   };
-  d[src] = 0;
+  dist[src] = 0;
   touched.push_back(src);
   heap_push(q, {0, src});
   long taken = 0;
   while (!q.empty()) {
     const auto [key, node] = heap_pop(q);
     const int v = node / NL, sheet = node % NL;
-    const double dv = d[node];
+    const double dv = dist[node];
     if (key != dv + bound(v)) continue;
     ++taken;
     if (node == dst) break;
-    for (int i = arc_start[v]; i < arc_start[v + 1]; ++i) {
-      const int next_sheet = sheet + arcs[i].sign * winding;
+    for (int i = first_arc[v], end = first_arc[v + 1]; i < end; ++i) {
+      const Arc& a = arc[i];
+      const int next_sheet = sheet + a.sign * winding;
       if (next_sheet < 0 || next_sheet >= NL) continue;
-      const int w = arcs[i].to * NL + next_sheet;
-      const double nd = dv + arcs[i].len;
-      if (nd < d[w]) {
+      const int w = a.to * NL + next_sheet;
+      const double nd = dv + a.len;
+      if (nd < dist[w]) {
         // A node whose key reaches `below` lies on no loop shorter than that (the key is a lower bound of
         // any loop through it): it is left out, and the nodes below it are taken in the same order.
-        const double key_w = nd + bound(arcs[i].to);
+        const double key_w = nd + bound(a.to);
         if (!(key_w < below)) continue;
-        if (std::isinf(d[w])) touched.push_back(w);
-        d[w] = nd, from[w] = node;
+        if (std::isinf(dist[w])) touched.push_back(w);
+        dist[w] = nd, prev[w] = node;
         heap_push(q, {key_w, w});
       }
     }

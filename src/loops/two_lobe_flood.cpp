@@ -174,36 +174,42 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   contact.assign(cell.size(), 0);
   box.contact = &contact;
   std::vector<std::uint32_t> shore_local;
+  // The loop reads the cells, the contact marks and the buckets through plain pointers: through the vectors
+  // (a reference and thread_locals) every read went back for their data pointers, the stores between them
+  // might have moved.
+  Word* const cells = cell.data();
+  std::uint8_t* const touching = contact.data();
+  std::vector<std::uint32_t>* bucket = buckets.data();  // again after the by-distance flood adds a bucket
   for (std::size_t b = 0; b < used; ++b) {
-    for (std::size_t q = 0; q < buckets[b].size(); ++q) {
+    for (std::size_t q = 0; q < bucket[b].size(); ++q) {
       // The flood waits on its cells' cache misses (perf: half its time on one load): ask for the cells
       // around a vertex a few places ahead in the queue (its neighbours' rows) while this one is visited.
-      if (q + kPrefetchAhead < buckets[b].size()) {
-        const std::uintptr_t ahead = reinterpret_cast<std::uintptr_t>(cell.data() + buckets[b][q + kPrefetchAhead]);
+      if (q + kPrefetchAhead < bucket[b].size()) {
+        const std::uintptr_t ahead = reinterpret_cast<std::uintptr_t>(cells + bucket[b][q + kPrefetchAhead]);
         for (std::int64_t row : prefetch_rows) __builtin_prefetch(reinterpret_cast<const void*>(ahead + std::uintptr_t(row)));
       }
-      const std::uint32_t xl = buckets[b][q];
-      const std::uint32_t lx = cell[xl] & kZone;
+      const std::uint32_t xl = bucket[b][q];
+      const std::uint32_t lx = cells[xl] & kZone;
       bool at_shore = false;
       auto visit = [&](std::uint32_t ul) {
-        Word& w = cell[ul];
+        Word& w = cells[ul];
         const std::uint32_t lu = w & kZone;
         if (lu == kOutside) { at_shore = true; return; }
-        if (lu != 0 && lu != lx) { contact[xl] = contact[ul] = 1; return; }
+        if (lu != 0 && lu != lx) { touching[xl] = touching[ul] = 1; return; }
         if (lu == 0) {
           w = Word(w | lx);
           if (!by_distance) {
-            buckets[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
+            bucket[std::max(b, std::size_t(w >> kLevelShift))].push_back(ul);
           } else {
             if (b + 1 == used) {
-              if (used == buckets.size()) buckets.emplace_back();
-              buckets[used++].clear();
+              if (used == buckets.size()) buckets.emplace_back(), bucket = buckets.data();
+              bucket[used++].clear();
             }
-            buckets[b + 1].push_back(ul);
+            bucket[b + 1].push_back(ul);
           }
         }
       };
-      if (cell[xl] & kBorder) {
+      if (cells[xl] & kBorder) {
         for_neighbours(node_of(xl), [&](const Node& u) { visit(u.li); });
       } else {
         for (int k = 0; k < 14; ++k) visit(std::uint32_t(std::int64_t(xl) + local_delta[k]));
@@ -220,7 +226,7 @@ FloodOutcome flood_with(const ScalarGrid& grid, const FreudenthalComplex& cx, co
   }
   {
     std::size_t kept = 0;
-    for (const auto& bucket : buckets) kept += bucket.capacity();
+    for (const auto& stored : buckets) kept += stored.capacity();
     for (std::size_t b = buckets.size(); b-- > 0 && kept > kKeptEntries;) {
       kept -= buckets[b].capacity();
       std::vector<std::uint32_t>().swap(buckets[b]);
