@@ -656,6 +656,57 @@ TEST(Shorten, SearchForAShorterLoopOnlyFindsTheSameOneOrNone) {
   EXPECT_GT(k, 20u);
 }
 
+// A descent searches near the best loop so far (ShortenOptions::descent_rings): its search takes only the
+// marked vertices. Marking every vertex changes nothing; marking the rings around a loop finds that loop
+// again for fewer nodes; a mask that leaves out part of the loop sends the search round it.
+TEST(Shorten, SearchWithinMarkedVerticesKeepsToThem) {
+  MeridianBand band(48, 6);
+  ASSERT_TRUE(band.built);
+  auto& sh = band.sh;
+  const std::size_t nv = sh.band.global.size();
+  int checked = 0, went_round = 0;
+  for (std::size_t v = 0; v < nv; v += 97) {
+    double full_length = 0;
+    long before = sh.search_nodes.load();
+    const std::vector<int> full = sh.shortest_loop_through(int(v), full_length);
+    const long full_nodes = sh.search_nodes.load() - before;
+    ASSERT_FALSE(full.empty());
+
+    const std::vector<char> all(nv, 1);
+    double length = 0;
+    before = sh.search_nodes.load();
+    EXPECT_EQ(sh.shortest_loop_through(int(v), length, false, std::numeric_limits<double>::infinity(), &all), full);
+    EXPECT_EQ(length, full_length);
+    EXPECT_EQ(sh.search_nodes.load() - before, full_nodes);
+
+    // The rings around the loop: every vertex of the loop marked, and a vertex marked only next to a marked one.
+    std::vector<char> near;
+    sh.mark_near(full, 2, near);
+    for (int m : full) EXPECT_TRUE(near[std::size_t(sh.local_of(m))]);
+    std::size_t marked = 0;
+    for (std::size_t u = 0; u < nv; ++u) marked += near[u] != 0;
+    EXPECT_LT(marked, nv);
+    before = sh.search_nodes.load();
+    EXPECT_EQ(sh.shortest_loop_through(int(v), length, false, std::numeric_limits<double>::infinity(), &near), full);
+    EXPECT_EQ(length, full_length);
+    EXPECT_LT(sh.search_nodes.load() - before, full_nodes);
+
+    // Without the loop's vertices but v's, the loop found runs through marked vertices only, and is longer.
+    std::vector<char> without = near;
+    for (int m : full)
+      if (sh.local_of(m) != int(v)) without[std::size_t(sh.local_of(m))] = 0;
+    const std::vector<int> around = sh.shortest_loop_through(int(v), length, false, std::numeric_limits<double>::infinity(), &without);
+    if (!around.empty()) {
+      for (int m : around) EXPECT_TRUE(without[std::size_t(sh.local_of(m))]) << "band vertex " << v;
+      EXPECT_GT(length, full_length);
+      ++went_round;
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 5);
+  EXPECT_GT(went_round, 0);
+}
+
 // On a closed, consistently oriented surface the neighbours come from each face's next vertex alone, each
 // once; a flipped face or a hole turns that off, and either way a vertex's neighbours are its faces' corners.
 TEST(Shorten, NeighboursOfAClosedOrientedSurfaceAndOfOneThatIsNot) {

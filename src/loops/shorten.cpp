@@ -207,11 +207,17 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     }
   }
   int descents = 0;
+  // The first searches place the loop in the band; a descent moves it by a vertex or two, so it searches
+  // only near the best loop so far (each took the whole band, two thirds of the searches' nodes on the cage).
+  const int descent_rings = std::max(0, opt.descent_rings);
+  std::vector<char> near_best;
   for (int it = 0; it < 16 && s >= 0; ++it) {
     double L;
     ++descents;
     const double wanted = best_len - 1e-12;  // a descent only takes a shorter loop; the search knows it
-    auto P = sh.shortest_loop_through(s, L, !best.empty() && sh.cut_is_near_ahead(best, s), wanted);
+    const bool near_only = descent_rings > 0 && !best.empty();
+    if (near_only) sh.mark_near(best, descent_rings, near_best);
+    auto P = sh.shortest_loop_through(s, L, !best.empty() && sh.cut_is_near_ahead(best, s), wanted, near_only ? &near_best : nullptr);
     if (P.empty() || !(L < wanted)) break;
     best = P, best_len = L;
     double acc = 0;  // next start: the vertex at half the length

@@ -335,7 +335,26 @@ bool Shortener::cut_is_near_ahead(const std::vector<int>& loop, int s) const {
   return ahead >= 0 && ahead < total / 2;
 }
 
-std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool backward, double below) const {
+void Shortener::mark_near(const std::vector<int>& loop, int rings, std::vector<char>& marks) const {
+  marks.assign(band.global.size(), 0);
+  std::vector<int> frontier, next;
+  for (int v : loop) {
+    const int l = local_of(v);
+    if (l >= 0 && !marks[std::size_t(l)]) marks[std::size_t(l)] = 1, frontier.push_back(l);
+  }
+  for (int k = 0; k < rings && !frontier.empty(); ++k) {
+    next.clear();
+    for (int v : frontier)
+      for (int i = arc_start[std::size_t(v)]; i < arc_start[std::size_t(v) + 1]; ++i) {
+        const int w = arcs[std::size_t(i)].to;
+        if (!marks[std::size_t(w)]) marks[std::size_t(w)] = 1, next.push_back(w);
+      }
+    frontier.swap(next);
+  }
+}
+
+std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool backward, double below,
+                                                  const std::vector<char>* within) const {
   // Two sheets of the cover: the one the search starts on and the next one in the loop's winding
   // direction (sheet = crossings of the cut so far, times the winding). A path that dips into a third
   // sheet crosses the cut back and forth, which a cut that runs straight across the band (the fewest
@@ -384,6 +403,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
   const int* const first_arc = arc_start.data();
   const P3* const at = position.data();
   std::vector<int>& bounded = scratch.bounded;
+  const char* const allowed = within ? within->data() : nullptr;
   auto bound = [&](int v) {
     double b = bounds[v];
     if (b < 0) b = bounds[v] = dist3(at[v], target), bounded.push_back(v);
@@ -402,6 +422,7 @@ std::vector<int> Shortener::shortest_loop_through(int s, double& length, bool ba
     if (node == dst) break;
     for (int i = first_arc[v], end = first_arc[v + 1]; i < end; ++i) {
       const Arc& a = arc[i];
+      if (allowed && !allowed[a.to]) continue;
       const int next_sheet = sheet + a.sign * winding;
       if (next_sheet < 0 || next_sheet >= NL) continue;
       const int w = a.to * NL + next_sheet;

@@ -113,8 +113,13 @@ struct Shortener {
   // takes fewer nodes when the cut lies a short way ahead of s, see cut_is_near_ahead).
   // `below`: only a loop shorter than this is wanted (none found: empty, length infinite); the search then
   // leaves out the nodes that cannot lie on one.
+  // `within` (per band vertex, may be null): the search takes only the vertices marked there.
   std::vector<int> shortest_loop_through(int s, double& length, bool backward = false,
-                                         double below = std::numeric_limits<double>::infinity()) const;
+                                         double below = std::numeric_limits<double>::infinity(),
+                                         const std::vector<char>* within = nullptr) const;
+  // Marks (per band vertex) the vertices within `rings` arcs of the band vertices of `loop` (mesh vertices):
+  // where a descent's search may go (ShortenOptions::descent_rings).
+  void mark_near(const std::vector<int>& loop, int rings, std::vector<char>& marks) const;
   // Whether, walking `loop` (mesh vertices, through band vertex s) on from s in its own direction, the
   // first crossing of the cut comes before half the loop's length.
   bool cut_is_near_ahead(const std::vector<int>& loop, int s) const;

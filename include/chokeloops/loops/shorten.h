@@ -56,6 +56,12 @@ struct ShortenOptions {
   // Step 3 starts from the shortest nearby plane section when that is shorter (see Method): on the cage's
   // 75 handle loops the swap rounds went from 43 to 4 at the median, the loops within 2e-6 of their length.
   bool plane_sections = true;
+  // Step 2's descents (the searches through the midpoint of the best loop so far, which move it by a vertex
+  // or two) take only the band's vertices within this many rings of that loop; 0: the whole band. Against
+  // the whole band, 6 left the cage's 127 loops identical, the grey-matter map's 1861 but one (shorter), and
+  // no loop of the pierced block, fertility or Neptune longer by more than 5e-5 of its length (three of
+  // fertility's up to 1.7% shorter), for a third fewer search nodes on the cage, 28% on the block.
+  int descent_rings = 6;
 };
 
 struct ShortenResult {
