@@ -44,9 +44,11 @@ double Shortener::shortest_plane_section(const P3& point, const P3& normal, std:
   thread_local std::vector<double> height;  // per band vertex, above the plane
   thread_local std::vector<char> visited;   // per band face
   thread_local std::vector<int> cycle;
+  // The band's own copy of its points (build_arcs): the mesh's are scattered over megabytes, and a line
+  // search measures several sections of one band.
   height.resize(band.global.size());
   for (std::size_t v = 0; v < band.global.size(); ++v) {
-    const P3& p = mesh.vertices[std::size_t(band.global[v])];
+    const P3& p = position[v];
     height[v] = (p[0] - point[0]) * normal[0] + (p[1] - point[1]) * normal[1] + (p[2] - point[2]) * normal[2];
   }
   auto above = [&](int v) { return height[std::size_t(v)] >= 0; };
@@ -65,8 +67,7 @@ double Shortener::shortest_plane_section(const P3& point, const P3& normal, std:
   auto crossing_point = [&](std::size_t hl) {
     const int a = band.corner[hl], b = band.corner[std::size_t(MeshAdjacency::next(int(hl)))];
     const double ha = height[std::size_t(a)], hb = height[std::size_t(b)];
-    return lerp3(mesh.vertices[std::size_t(band.global[std::size_t(a)])], mesh.vertices[std::size_t(band.global[std::size_t(b)])],
-                 ha / (ha - hb));
+    return lerp3(position[std::size_t(a)], position[std::size_t(b)], ha / (ha - hb));
   };
   for (std::size_t start = 0; start < F; ++start) {
     std::array<int, 2> k{};

@@ -106,7 +106,7 @@ struct Shortener {
   struct Arc { double len; int to; int sign; };  // 16 bytes: the search reads them in runs
   std::vector<int> arc_start;
   std::vector<Arc> arcs;
-  std::vector<P3> position;  // per band vertex, for the search's lower bound
+  std::vector<P3> position;  // per band vertex: the search's lower bound, the plane sections
   void build_arcs();
   // Shortest loop through band vertex s winding `band.winding` times; returns mesh vertices, in the
   // input loop's direction. `backward`: search the loop the other way round (the same loops; the search
