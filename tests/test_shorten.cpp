@@ -224,6 +224,35 @@ TEST(Shorten, VaryingTorusLoopSlidesToThinnestSectionWhenAllowed) {
   EXPECT_NEAR(settled.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
 }
 
+// A narrow band first: a loop that settles inside it is returned from it; one that runs to its edge (the
+// neck lies farther off) is shortened again in the full band, from the input loop, as without it.
+TEST(Shorten, NarrowBandFirstWidensOnlyAtItsEdge) {
+  const int n = 128;
+  auto g = sample_field({n, n, n}, analytic::varying_torus(), {-0.3, -0.3, -0.3}, {1.3, 1.3, 1.3});
+  auto m = extract_zero_surface(g);
+  auto adj = build_adjacency(m);
+  auto start = snap_polyline_to_edge_path(m, wiggly_meridian({0.5, 0.5, 0.5}, 0.5, 0.15 + 0.06 * std::cos(M_PI - 0.5), M_PI - 0.5, 0.0, 1));
+  ShortenOptions full{0, 60, 400}, narrow_first = full;
+  narrow_first.first_rings = 4;
+  const auto far = shorten_loop(m, adj, start, full);
+  const auto widened = shorten_loop(m, adj, start, narrow_first);
+  EXPECT_GT(far.rings, 4);
+  EXPECT_EQ(widened.rings, far.rings);
+  EXPECT_EQ(widened.points, far.points);
+  // Alone, the narrow band stops the loop at its edge, well short of the neck.
+  ShortenOptions narrow_only = full;
+  narrow_only.max_rings = 4;
+  const auto held = shorten_loop(m, adj, start, narrow_only);
+  EXPECT_TRUE(held.at_band_edge);
+  EXPECT_GT(held.length, far.length * 1.05);
+  // At the neck the narrow band's loop is the answer.
+  auto at_neck = snap_polyline_to_edge_path(m, wiggly_meridian({0.5, 0.5, 0.5}, 0.5, 0.09, M_PI, 0.0, 1));
+  const auto settled = shorten_loop(m, adj, at_neck, narrow_first);
+  EXPECT_EQ(settled.rings, 4);
+  EXPECT_FALSE(settled.at_band_edge);
+  EXPECT_NEAR(settled.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
+}
+
 // Step 3 starts from the band's shortest plane section near the edge loop's plane: the edge loop that step 2
 // finds a few edges from a tube's neck reaches it in a few swap rounds instead of one vertex row per round.
 TEST(Shorten, PlaneSectionsStartTheSwapsAtTheNeck) {

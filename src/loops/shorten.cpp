@@ -42,10 +42,10 @@ struct StepClock {
     last = now;
   }
 };
-}  // namespace
 
-ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
-                           const ShortenOptions& opt) {
+// shorten_loop within a band of at most opt.max_rings rings.
+ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
+                              const ShortenOptions& opt) {
   ShortenResult R;
   if (loop.empty()) throw Error("loop is empty");
   for (size_t i = 0; i < loop.size(); ++i) {
@@ -334,6 +334,25 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
     R.strip_faces = S;
   }
   return R;
+}
+
+}  // namespace
+
+ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
+                           const ShortenOptions& opt) {
+  if (opt.first_rings <= 0 || opt.first_rings >= opt.max_rings) return shorten_in_band(mesh, adj, loop, opt);
+  ShortenOptions narrow = opt;
+  narrow.max_rings = opt.first_rings;
+  ShortenResult first = shorten_in_band(mesh, adj, loop, narrow);
+  if (first.rings > 0 && !first.at_band_edge) return first;
+  // The wide band starts from the input loop again, so that max_move keeps its meaning; of two loops
+  // in the class, the shorter.
+  ShortenResult wide = shorten_in_band(mesh, adj, loop, opt);
+  if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
+    std::fprintf(stderr, "widened band: %d rings %.9f (at its edge: %d), %d rings %.9f\n", first.rings, first.length,
+                 int(first.at_band_edge), wide.rings, wide.length);
+  if (first.rings > 0 && !(wide.rings > 0 && wide.length <= first.length)) return first;
+  return wide;
 }
 
 void release_shortening_scratch() noexcept { detail::DenseIntMap::release_pool(); }

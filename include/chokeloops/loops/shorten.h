@@ -62,6 +62,11 @@ struct ShortenOptions {
   // no loop of the pierced block, fertility or Neptune longer by more than 5e-5 of its length (three of
   // fertility's up to 1.7% shorter), for a third fewer search nodes on the cage, 28% on the block.
   int descent_rings = 6;
+  // > 0 (and below max_rings): the loop is first shortened in a band of this many rings, and again in the
+  // band of max_rings (from the input loop) only when it comes within an edge or two of the narrow band's
+  // edge or no narrow band is an annulus; the shorter of the two is returned. Most loops settle well inside
+  // a few rings, and a band's cost grows with its width.
+  int first_rings = 0;
 };
 
 struct ShortenResult {
