@@ -242,8 +242,10 @@ void Shortener::build_arcs() {
   // repeats (edges of more than two faces) dropped: the arcs a sort of all of them gave, for a counting pass.
   struct Half { int from; Arc arc; };
   thread_local std::vector<Half> all;  // this step's tables are the thread's, kept between calls
-  all.clear();
-  all.reserve(band.faces.size() * 3 + 16);
+  // Sized for every half-edge once and written through a pointer: push_back's capacity check and its
+  // out-of-line growth path were half of this step's samples (perf, the cage's handle loops).
+  if (all.size() < band.faces.size() * 6) all.resize(band.faces.size() * 6);  // never shrunk: no refill
+  Half* out = all.data();
   const std::size_t nv = band.global.size();
   position.resize(nv);
   for (std::size_t v = 0; v < nv; ++v) position[v] = mesh.vertices[std::size_t(band.global[v])];
@@ -255,24 +257,27 @@ void Shortener::build_arcs() {
       const int a = band.corner[hl], c = band.corner_to(hl);
       const double L = dist3(position[std::size_t(a)], position[std::size_t(c)]);
       const int sg = band.crossing_sign[hl];
-      all.push_back({a, {L, c, sg}});
-      all.push_back({c, {L, a, -sg}});
+      *out++ = {a, {L, c, sg}};
+      *out++ = {c, {L, a, -sg}};
     }
+  const Half* const first_half = all.data();
+  const Half* const end_half = out;
   thread_local std::vector<int> fill;
   fill.assign(nv + 1, 0);
-  for (const Half& x : all) ++fill[std::size_t(x.from) + 1];
+  for (const Half* x = first_half; x != end_half; ++x) ++fill[std::size_t(x->from) + 1];
   for (std::size_t v = 0; v < nv; ++v) fill[v + 1] += fill[v];
   thread_local std::vector<Arc> bucketed;
-  bucketed.resize(all.size());
+  const std::size_t halves = std::size_t(end_half - first_half);
+  if (bucketed.size() < halves) bucketed.resize(halves);
   {
     thread_local std::vector<int> next;
     next.assign(fill.begin(), fill.end() - 1);
-    for (const Half& x : all) bucketed[std::size_t(next[std::size_t(x.from)]++)] = x.arc;
+    for (const Half* x = first_half; x != end_half; ++x) bucketed[std::size_t(next[std::size_t(x->from)]++)] = x->arc;
   }
   auto before = [](const Arc& x, const Arc& y) { return x.to != y.to ? x.to < y.to : x.sign < y.sign; };
   arc_start.assign(nv + 1, 0);
   arcs.clear();
-  arcs.reserve(bucketed.size());
+  arcs.reserve(halves);
   for (std::size_t v = 0; v < nv; ++v) {
     Arc* b = bucketed.data() + fill[v];
     Arc* e = bucketed.data() + fill[v + 1];
