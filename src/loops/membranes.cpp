@@ -212,8 +212,8 @@ class LoopTracer {
       // 0.17%, for 2.4 searches a loop instead of 6.4 (a loop that ends at its band's edge still slides).
       so.cut_samples = 0;
       // Most loops settle within a few rings of the interface: the cage's 127 came out identical in a band
-      // of 8 rings first (12 only for the 15 that reached its edge), for a sixth less time a loop at the
-      // median (README, "A narrow band first").
+      // of 8 rings first (12 only for the 15 that reached its edge), and its median loop went 5.7 -> 4.6 ms
+      // with two smaller changes (README, "A narrow band first").
       so.first_rings = 8;
       ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
