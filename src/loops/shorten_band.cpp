@@ -289,43 +289,6 @@ void Shortener::build_arcs() {
   }
 }
 
-namespace {
-// A 4-ary min-heap of (distance, node), popped in the order of that pair as std::priority_queue with
-// std::greater pops it (so the search relaxes in the same order): shallower than a binary heap, and its
-// storage is the thread's, kept between searches.
-struct QueueEntry { double d; int node; };
-inline bool before(const QueueEntry& a, const QueueEntry& b) { return a.d < b.d || (a.d == b.d && a.node < b.node); }
-void heap_push(std::vector<QueueEntry>& h, QueueEntry e) {
-  std::size_t i = h.size();
-  h.push_back(e);
-  while (i > 0) {
-    const std::size_t parent = (i - 1) / 4;
-    if (!before(e, h[parent])) break;
-    h[i] = h[parent];
-    i = parent;
-  }
-  h[i] = e;
-}
-QueueEntry heap_pop(std::vector<QueueEntry>& h) {
-  const QueueEntry top = h[0], last = h.back();
-  h.pop_back();
-  const std::size_t n = h.size();
-  if (n == 0) return top;
-  std::size_t i = 0;
-  for (;;) {
-    const std::size_t first = 4 * i + 1;
-    if (first >= n) break;
-    std::size_t best = first;
-    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
-      if (before(h[c], h[best])) best = c;
-    if (!before(h[best], last)) break;
-    h[i] = h[best];
-    i = best;
-  }
-  h[i] = last;
-  return top;
-}
-}  // namespace
 
 bool Shortener::cut_is_near_ahead(const std::vector<int>& loop, int s) const {
   const int n = int(loop.size());

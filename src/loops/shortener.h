@@ -26,6 +26,41 @@ inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v bet
   double cn = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   return std::atan2(cn, u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
 }
+// A 4-ary min-heap of (distance, node), popped in the order of that pair as std::priority_queue with
+// std::greater pops it (so the search relaxes in the same order): shallower than a binary heap, and its
+// storage is the caller's (the searches and the band's surface distances keep theirs per thread).
+struct QueueEntry { double d; int node; };
+inline bool before(const QueueEntry& a, const QueueEntry& b) { return a.d < b.d || (a.d == b.d && a.node < b.node); }
+inline void heap_push(std::vector<QueueEntry>& h, QueueEntry e) {
+  std::size_t i = h.size();
+  h.push_back(e);
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 4;
+    if (!before(e, h[parent])) break;
+    h[i] = h[parent];
+    i = parent;
+  }
+  h[i] = e;
+}
+inline QueueEntry heap_pop(std::vector<QueueEntry>& h) {
+  const QueueEntry top = h[0], last = h.back();
+  h.pop_back();
+  const std::size_t n = h.size();
+  if (n == 0) return top;
+  std::size_t i = 0;
+  for (;;) {
+    const std::size_t first = 4 * i + 1;
+    if (first >= n) break;
+    std::size_t best = first;
+    for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
+      if (before(h[c], h[best])) best = c;
+    if (!before(h[best], last)) break;
+    h[i] = h[best];
+    i = best;
+  }
+  h[i] = last;
+  return top;
+}
 // The index of v among face f's corners (2 when v is not the first or second).
 inline int corner_of(const SurfaceMesh& mesh, int f, int v) {
   const auto& t = mesh.faces[std::size_t(f)];
