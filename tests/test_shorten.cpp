@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <queue>
 #include <random>
 #include <unordered_map>
 
@@ -471,6 +473,64 @@ TEST(Shorten, DenseIntMapAgreesWithUnorderedMapAndStartsEmptyFromThePool) {
   detail::DenseIntMap empty;
   EXPECT_FALSE(empty.contains(0));
   EXPECT_THROW(empty[0], std::out_of_range);
+}
+
+// The ring region's surface distances (the Dijkstra over the arcs its BFS kept, and over the mesh for the
+// last ring) against a plain Dijkstra over the mesh's neighbours through the same vertices; its rings against
+// a plain BFS, its upper bounds above the distances. Both neighbour paths of the adjacency (closed and
+// oriented, and the general one).
+TEST(Shorten, RingRegionDistancesAreThoseOfADijkstraOverTheMesh) {
+  const int rings = 8;
+  MeridianOnTorus t = wiggly_meridian_on_torus(64, rings);
+  for (bool closed_oriented : {true, false}) {
+    MeshAdjacency adj = t.adj;
+    ASSERT_TRUE(t.adj.closed_oriented);
+    adj.closed_oriented = closed_oriented;
+    const shorten_detail::RingRegion rr(t.m, adj, t.loop, rings, true);
+    ASSERT_EQ(rr.vertices.size(), t.region.region.size());
+    for (std::size_t i = 0; i < rr.vertices.size(); ++i)
+      ASSERT_EQ(rr.ring[i], t.region.ring[std::size_t(t.region.rid.at(rr.vertices[i]))]) << "vertex " << rr.vertices[i];
+    // The reference: every arc between two region vertices, from the sorted neighbour lists.
+    const std::size_t n = rr.vertices.size();
+    std::vector<double> reference(n, std::numeric_limits<double>::infinity());
+    using QE = std::pair<double, int>;
+    std::priority_queue<QE, std::vector<QE>, std::greater<QE>> q;
+    for (int v : t.loop) reference[std::size_t(rr.index.at(v))] = 0, q.push({0.0, rr.index.at(v)});
+    std::vector<int> around;
+    while (!q.empty()) {
+      const auto [d, i] = q.top();
+      q.pop();
+      if (d > reference[std::size_t(i)]) continue;
+      const int v = rr.vertices[std::size_t(i)];
+      adj.neighbours(t.m, v, around);
+      for (int w : around) {
+        const int* wi = rr.index.find(w);
+        if (!wi) continue;
+        const double nd = d + shorten_detail::dist3(t.m.vertices[std::size_t(v)], t.m.vertices[std::size_t(w)]);
+        if (nd < reference[std::size_t(*wi)]) reference[std::size_t(*wi)] = nd, q.push({nd, *wi});
+      }
+    }
+    const double farthest = *std::max_element(reference.begin(), reference.end());
+    ASSERT_TRUE(std::isfinite(farthest));
+    for (std::size_t i = 0; i < n; ++i) ASSERT_GE(rr.upper[i], reference[i] * (1 - 1e-12)) << "vertex " << rr.vertices[i];
+    EXPECT_GT(rr.upper_max, 0.25 * farthest);
+    for (double max_move : {0.25 * farthest, 0.6 * farthest, 2 * farthest}) {
+      std::vector<double> dist;
+      rr.surface_distances(max_move, dist);
+      ASSERT_EQ(dist.size(), n);
+      int within = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (reference[i] <= max_move) {
+          ++within;
+          ASSERT_DOUBLE_EQ(dist[i], reference[i]) << "vertex " << rr.vertices[i] << " max_move " << max_move;
+        } else {
+          ASSERT_GT(dist[i], max_move) << "vertex " << rr.vertices[i];
+        }
+      }
+      EXPECT_GT(within, int(t.loop.size()));
+      if (max_move > farthest) EXPECT_EQ(within, int(n));
+    }
+  }
 }
 
 // The band's candidate faces and the Euler characteristics that refuse a ring count unbuilt: for every ring

@@ -7,9 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
 #include <limits>
-#include <queue>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -64,99 +62,16 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
   // Rings (BFS hops) and surface distance (Dijkstra along edges) from the loop, both bounded; all per-vertex
   // data lives on this region so that the cost follows the band, not the mesh.
   const int max_rings = std::max(1, opt.max_rings);
-  detail::DenseIntMap rid(mesh.vertices.size());
-  std::vector<int> region, ring;
-  // Each vertex's distance along some path from the loop bounds its surface distance from above: when no
-  // bound exceeds max_move, the distances cannot limit the band and the Dijkstra is not run. The bound is
-  // the BFS tree's path, shortened through every region neighbour met later (one pass, BFS order): with
-  // the tree's path alone half the cage's handle loops ran the Dijkstra for the band and the rest for the
-  // band-edge test, 7% of their time.
-  std::vector<double> upper;
-  // The arcs the BFS reads (region index and length, per vertex it expands, in region order): the surface
-  // distances below walk them again, without the mesh's scattered arrays (the Dijkstra read them a second
-  // time, 8.6% of the grey-matter map's run in perf against 3.9% for the BFS).
   const bool distances = opt.max_move > 0;
-  struct RegionArc { double len; int to; };
-  thread_local std::vector<RegionArc> region_arcs;
-  thread_local std::vector<int> arcs_from;  // region_arcs of region[i]: [arcs_from[i], arcs_from[i + 1])
-  arcs_from.clear();
-  std::size_t arc_count = 0;  // region_arcs is only grown (written through a pointer: the BFS's inner loop)
-  // A band of k rings round a loop of n vertices holds about (2k + 1) n of them: grown once, not a dozen times.
-  const std::size_t expected = loop.size() * std::size_t(2 * max_rings + 2);
-  region.reserve(expected), ring.reserve(expected), upper.reserve(expected);
-  for (int v : loop)
-    if (rid.emplace(v, int(region.size()))) region.push_back(v), ring.push_back(0), upper.push_back(0);
-  for (size_t i = 0; i < region.size(); ++i) {
-    const int v = region[i];
-    if (distances) arcs_from.push_back(int(arc_count));
-    if (ring[i] >= max_rings) continue;
-    // At most two neighbours per corner of v (MeshAdjacency::for_each_neighbour), a corner per face.
-    const std::size_t most = 6 * std::size_t(adj.vf_start[std::size_t(v) + 1] - adj.vf_start[std::size_t(v)]);
-    if (distances && arc_count + most > region_arcs.size()) region_arcs.resize(std::max(2 * region_arcs.size(), arc_count + most + 1024));
-    RegionArc* const arcs_out = region_arcs.data();
-    // The BFS waits on the mesh's arrays (scattered over tens of megabytes): ask for what the vertices a few
-    // places ahead will read, their face lists two stages before their faces.
-    if (i + 8 < region.size()) {
-      const int ahead = region[i + 8];
-      __builtin_prefetch(&adj.vf_start[std::size_t(ahead)]);
-      __builtin_prefetch(&mesh.vertices[std::size_t(ahead)]);
-    }
-    if (i + 4 < region.size()) {
-      const int near = region[i + 4];
-      const int first = adj.vf_start[std::size_t(near)], last = adj.vf_start[std::size_t(near) + 1];
-      __builtin_prefetch(&adj.vf[std::size_t(first)]);
-      for (int j = first; j < last; ++j) __builtin_prefetch(&mesh.faces[std::size_t(adj.vf[std::size_t(j)])]);
-    }
-    const auto& p = mesh.vertices[std::size_t(v)];
-    // Unsorted (a sort per vertex was a fifth of this step).
-    adj.for_each_neighbour(mesh, v, [&](int w) {
-      const double length = dist3(p, mesh.vertices[std::size_t(w)]);
-      const double through_v = upper[i] + length;
-      int wi = int(region.size());
-      if (rid.emplace(w, wi)) {
-        region.push_back(w), ring.push_back(ring[i] + 1), upper.push_back(through_v);
-      } else {
-        wi = rid.at(w);
-        double& bound = upper[std::size_t(wi)];
-        bound = std::min(bound, through_v);
-      }
-      if (distances) arcs_out[arc_count++] = {length, wi};
-    });
-  }
-  if (distances) arcs_from.push_back(int(arc_count));
-  const double upper_max = upper.empty() ? 0.0 : *std::max_element(upper.begin(), upper.end());
+  shorten_detail::RingRegion rr(mesh, adj, loop, max_rings, distances);
+  const detail::DenseIntMap& rid = rr.index;
+  const std::vector<int>& region = rr.vertices;
+  const std::vector<int>& ring = rr.ring;
+  const std::vector<double>& upper = rr.upper;
   std::vector<double> dist;
-  auto compute_distances = [&] {
-    // Only the vertices within max_move are expanded, often a small part of the rings: their neighbours in
-    // the region are read as they are (a neighbour met twice across a non-manifold edge costs a repeated
-    // arc and nothing else). The BFS's arcs serve every vertex it expanded; those of the last ring, which it
-    // did not, read the mesh. The same arcs and lengths as the mesh's: the same distances.
-    dist.assign(region.size(), std::numeric_limits<double>::infinity());
-    thread_local std::vector<shorten_detail::QueueEntry> q;
-    q.clear();
-    for (int v : loop) {
-      const int i = rid.at(v);
-      dist[std::size_t(i)] = 0, shorten_detail::heap_push(q, {0, i});
-    }
-    const RegionArc* const arc = region_arcs.data();
-    while (!q.empty()) {
-      const auto [d, i] = shorten_detail::heap_pop(q);
-      if (d > dist[std::size_t(i)] || d > opt.max_move) continue;
-      auto relax = [&](int wi, double length) {
-        const double nd = d + length;
-        if (nd < dist[std::size_t(wi)]) dist[std::size_t(wi)] = nd, shorten_detail::heap_push(q, {nd, wi});
-      };
-      if (ring[std::size_t(i)] < max_rings) {
-        for (int k = arcs_from[std::size_t(i)], end = arcs_from[std::size_t(i) + 1]; k < end; ++k) relax(arc[k].to, arc[k].len);
-        continue;
-      }
-      const auto& p = mesh.vertices[std::size_t(region[std::size_t(i)])];
-      adj.for_each_neighbour(mesh, region[std::size_t(i)], [&](int w) {
-        if (const int* wi = rid.find(w)) relax(*wi, dist3(p, mesh.vertices[std::size_t(w)]));
-      });
-    }
-  };
-  if (distances && upper_max > opt.max_move) compute_distances();
+  auto compute_distances = [&] { rr.surface_distances(opt.max_move, dist); };
+  // When no vertex's upper bound exceeds max_move, the distances cannot limit the band and are not computed.
+  if (distances && rr.upper_max > opt.max_move) compute_distances();
   std::vector<char> near_loop(region.size(), 0);
   for (size_t i = 0; i < region.size(); ++i)
     if (ring[i] <= 1) near_loop[i] = ring[i] == 0 ? 2 : 1;
