@@ -478,15 +478,18 @@ TEST(Shorten, DenseIntMapAgreesWithUnorderedMapAndStartsEmptyFromThePool) {
 // The ring region's surface distances (the Dijkstra over the arcs its BFS kept, and over the mesh for the
 // last ring) against a plain Dijkstra over the mesh's neighbours through the same vertices; its rings against
 // a plain BFS, its upper bounds above the distances. Both neighbour paths of the adjacency (closed and
-// oriented, and the general one).
+// oriented, and the general one); the arcs kept, not kept, and dropped halfway for want of room.
 TEST(Shorten, RingRegionDistancesAreThoseOfADijkstraOverTheMesh) {
   const int rings = 8;
   MeridianOnTorus t = wiggly_meridian_on_torus(64, rings);
-  for (bool closed_oriented : {true, false}) {
+  struct Case { bool closed_oriented, keep_arcs; std::size_t max_arcs; };
+  for (const Case& k : {Case{true, true, std::size_t(1) << 22}, Case{false, true, std::size_t(1) << 22},
+                        Case{true, false, std::size_t(1) << 22}, Case{true, true, 1000}}) {
     MeshAdjacency adj = t.adj;
     ASSERT_TRUE(t.adj.closed_oriented);
-    adj.closed_oriented = closed_oriented;
-    const shorten_detail::RingRegion rr(t.m, adj, t.loop, rings, true);
+    adj.closed_oriented = k.closed_oriented;
+    const shorten_detail::RingRegion rr(t.m, adj, t.loop, rings, k.keep_arcs, k.max_arcs);
+    EXPECT_EQ(rr.kept_arcs(), k.keep_arcs && k.max_arcs > 1000);
     ASSERT_EQ(rr.vertices.size(), t.region.region.size());
     for (std::size_t i = 0; i < rr.vertices.size(); ++i)
       ASSERT_EQ(rr.ring[i], t.region.ring[std::size_t(t.region.rid.at(rr.vertices[i]))]) << "vertex " << rr.vertices[i];

@@ -7,7 +7,7 @@
 namespace chokeloops::shorten_detail {
 
 RingRegion::RingRegion(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop, int max_rings,
-                       bool keep_arcs)
+                       bool keep_arcs, std::size_t max_arcs)
     : index(mesh.vertices.size()), mesh_(mesh), adj_(adj), loop_(loop), max_rings_(max_rings) {
   // Each vertex's distance along some path from the loop bounds its surface distance from above: when no
   // bound exceeds max_move, the distances cannot limit the band and need not be computed. The bound is
@@ -29,8 +29,13 @@ RingRegion::RingRegion(const SurfaceMesh& mesh, const MeshAdjacency& adj, const 
     if (keep_arcs) {
       // At most two neighbours per corner of v (MeshAdjacency::for_each_neighbour), a corner per face.
       const std::size_t most = 6 * std::size_t(adj.vf_start[std::size_t(v) + 1] - adj.vf_start[std::size_t(v)]);
-      if (arc_count + most > arcs_capacity_) {
-        const std::size_t capacity = std::max(2 * arcs_capacity_, std::max(arc_count + most, 7 * expected));
+      if (arc_count + most > max_arcs) {
+        // A region this big (a loop of some hundred thousand vertices) reads the mesh again instead.
+        keep_arcs = false;
+        arcs_.reset(), arcs_capacity_ = 0;
+        arcs_from_.clear(), arcs_from_.shrink_to_fit();
+      } else if (arc_count + most > arcs_capacity_) {
+        const std::size_t capacity = std::min(max_arcs, std::max(2 * arcs_capacity_, std::max(arc_count + most, 7 * expected)));
         std::unique_ptr<Arc[]> grown(new Arc[capacity]);
         std::copy(arcs_.get(), arcs_.get() + arc_count, grown.get());
         arcs_ = std::move(grown), arcs_capacity_ = capacity;

@@ -95,12 +95,15 @@ struct Band {
 // The vertices within `max_rings` edge rings of a loop (mesh vertices), in BFS order from the loop's own: each
 // one's ring, an upper bound of its surface distance from the loop (the BFS tree's path, shortened through
 // every region neighbour met later, in one pass), and their exact surface distances on demand. It keeps
-// references to the mesh, the adjacency and the loop; with keep_arcs it holds about 100 bytes per vertex.
+// references to the mesh, the adjacency and the loop; with keep_arcs it holds about 100 bytes per vertex,
+// up to max_arcs arcs (16 bytes each), beyond which it drops them and the distances read the mesh.
 struct RingRegion {
   RingRegion(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop, int max_rings,
-             bool keep_arcs);
+             bool keep_arcs, std::size_t max_arcs = std::size_t(1) << 22);
   // dist[i]: the length of the shortest edge path from the loop to vertices[i] through the region, for every
-  // vertex within max_move; farther vertices get a larger value or infinity (without keep_arcs, read from the mesh).
+  // vertex within max_move; farther vertices get a larger value or infinity (the same numbers with the arcs
+  // kept or read from the mesh).
+  bool kept_arcs() const { return !arcs_from_.empty(); }
   void surface_distances(double max_move, std::vector<double>& dist) const;
 
   detail::DenseIntMap index;  // mesh vertex -> its place in `vertices`
