@@ -1,6 +1,7 @@
 #pragma once
-// Internals of shorten_loop shared by its three files: the annulus band around the loop, the Shortener that
-// holds it (steps 1-2 in shorten_band.cpp, step 3 in shorten_strip.cpp) and the small 3D helpers they use.
+// Internals of shorten_loop shared by its files: the ring region around the loop (shorten_region.cpp), the
+// annulus band in it, the Shortener that holds the band (steps 1-2 in shorten_band.cpp, step 3 in
+// shorten_strip.cpp and shorten_section.cpp) and the small 3D helpers and the heap they use.
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -31,13 +32,13 @@ inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v bet
 // std::greater pops it (so the search relaxes in the same order): shallower than a binary heap, and its
 // storage is the caller's (the searches and the band's surface distances keep theirs per thread).
 struct QueueEntry { double d; int node; };
-inline bool before(const QueueEntry& a, const QueueEntry& b) { return a.d < b.d || (a.d == b.d && a.node < b.node); }
+inline bool pops_before(const QueueEntry& a, const QueueEntry& b) { return a.d < b.d || (a.d == b.d && a.node < b.node); }
 inline void heap_push(std::vector<QueueEntry>& h, QueueEntry e) {
   std::size_t i = h.size();
   h.push_back(e);
   while (i > 0) {
     const std::size_t parent = (i - 1) / 4;
-    if (!before(e, h[parent])) break;
+    if (!pops_before(e, h[parent])) break;
     h[i] = h[parent];
     i = parent;
   }
@@ -54,8 +55,8 @@ inline QueueEntry heap_pop(std::vector<QueueEntry>& h) {
     if (first >= n) break;
     std::size_t best = first;
     for (std::size_t c = first + 1; c < std::min(first + 4, n); ++c)
-      if (before(h[c], h[best])) best = c;
-    if (!before(h[best], last)) break;
+      if (pops_before(h[c], h[best])) best = c;
+    if (!pops_before(h[best], last)) break;
     h[i] = h[best];
     i = best;
   }
@@ -103,8 +104,9 @@ struct RingRegion {
   // dist[i]: the length of the shortest edge path from the loop to vertices[i] through the region, for every
   // vertex within max_move; farther vertices get a larger value or infinity (the same numbers with the arcs
   // kept or read from the mesh).
-  bool kept_arcs() const { return !arcs_from_.empty(); }
   void surface_distances(double max_move, std::vector<double>& dist) const;
+  // Whether the arcs were kept (keep_arcs, and no more than max_arcs of them).
+  bool kept_arcs() const { return !arcs_from_.empty(); }
 
   detail::DenseIntMap index;  // mesh vertex -> its place in `vertices`
   std::vector<int> vertices, ring;
