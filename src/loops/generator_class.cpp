@@ -71,6 +71,46 @@ int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cy
   return -1;
 }
 
+bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& cycle, const std::array<double, 3>& p,
+                             const std::array<double, 3>& n) {
+  // Crossings in the cycle's order; a vertex on the plane counts as on its positive side, as if the plane
+  // were moved a little toward the negative one.
+  std::vector<std::array<double, 3>> crossings;
+  auto side = [&](const std::array<double, 3>& x) { return (x[0] - p[0]) * n[0] + (x[1] - p[1]) * n[1] + (x[2] - p[2]) * n[2]; };
+  for (std::size_t k = 0; k < cycle.size(); ++k) {
+    const auto &a = cycle[k], &b = cycle[(k + 1) % cycle.size()];
+    const double da = side(a), db = side(b);
+    if ((da >= 0) == (db >= 0)) continue;
+    const double t = da / (da - db);
+    crossings.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+  }
+  const std::size_t m = crossings.size();
+  std::vector<std::size_t> group(m);
+  for (std::size_t k = 0; k < m; ++k) group[k] = k;
+  auto root = [&](std::size_t x) {
+    while (group[x] != x) x = group[x] = group[group[x]];
+    return x;
+  };
+  auto join = [&](std::size_t a, std::size_t b) {
+    const std::size_t ra = root(a), rb = root(b);
+    if (ra != rb && sections.segment_clear(crossings[a], crossings[b])) group[ra] = rb;
+  };
+  // Neighbours along the cycle first (near each other, short segments), then any two groups still odd.
+  for (std::size_t k = 0; k + 1 < m; ++k) join(k, k + 1);
+  auto odd_groups = [&] {
+    std::vector<char> odd(m, 0);
+    for (std::size_t k = 0; k < m; ++k) odd[root(k)] ^= 1;
+    std::vector<std::size_t> out;
+    for (std::size_t k = 0; k < m; ++k)
+      if (odd[k]) out.push_back(k);
+    return out;
+  };
+  std::vector<std::size_t> odd = odd_groups();
+  for (std::size_t i = 0; i < odd.size(); ++i)
+    for (std::size_t j = i + 1; j < odd.size(); ++j) join(odd[i], odd[j]);
+  return odd_groups().empty();
+}
+
 bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                             SurfaceTopology& topology, const SurfaceSections& sections_of, const Choke& c,
                             const std::vector<const SideCycle*>& other_side, const SideCycle* own, Polyline3& out,
@@ -108,7 +148,20 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
   // longer than that ends the search (wide sections over the whole surface are what cost here).
   std::vector<char> done(planes.size(), 0);
   double best_length = 1e300;
-  for (double radius : {6 * c.depth + 6 * h, 24 * c.depth + 12 * h, std::sqrt(reach)}) {
+  const std::array<double, 3> radii{6 * c.depth + 6 * h, 24 * c.depth + 12 * h, std::sqrt(reach)};
+  for (std::size_t level = 0; level < radii.size(); ++level) {
+    const double radius = radii[level];
+    // The planes whose sections cannot link the own cycle once are left out from the second radius on: the
+    // test costs about what a section costs at the first.
+    if (own && level == 1) {
+      std::vector<std::size_t> open;
+      for (std::size_t i = 0; i < planes.size(); ++i)
+        if (!done[i]) open.push_back(i);
+      tbb::parallel_for(std::size_t(0), open.size(), [&](std::size_t k) {
+        const Plane& plane = planes[open[k]];
+        if (section_cannot_link_odd(sections_of, own->points, plane.point, plane.normal)) done[open[k]] = 1;
+      });
+    }
     std::vector<std::size_t> index;
     for (std::size_t i = 0; i < planes.size(); ++i)
       if (!done[i]) index.push_back(i);

@@ -37,6 +37,15 @@ void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& cho
 // Index in `cycles` of the first one `curve` links, or -1 (boxes apart are skipped: they cannot link).
 int linked_cycle(const Polyline3& curve, const std::vector<const SideCycle*>& cycles);
 
+// Whether no curve of the section by the plane (p, n) can link `cycle` an odd number of times. A closed curve of
+// the plane links the cycle as often as the signed count of the cycle's crossings with the plane it winds
+// around; two crossings joined by a segment that meets no face are wound around by the same curves (every
+// curve lies on the surface). So when each group of crossings joined that way holds an even number of them,
+// every curve winds around an even number: the plane's sections need not be made (on the grey-matter map at
+// 128, half the planes that reach the whole-grid radius, whose sections cost 2 ms each).
+bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& cycle, const std::array<double, 3>& p,
+                             const std::array<double, 3>& n);
+
 // Independence: loops that each bound on their side still need not be independent (two may be in one
 // class). Side by side, in order of persistence, a generator loop whose row of linking numbers (mod 2) with
 // its own side's cycles adds nothing to the rows before it is dropped with a note (found = false): those

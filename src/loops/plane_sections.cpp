@@ -536,4 +536,35 @@ Polyline3 SurfaceSections::around(const std::array<double, 3>& p, const std::arr
   return detail::section_of(surface_, cells_->cells.near_plane(surface_, p, unit, max_radius), p, unit, max_radius);
 }
 
+bool SurfaceSections::segment_clear(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
+  // A face the segment meets has its first vertex within a face's size (less than a cell) of the segment.
+  using detail::V3, detail::v3;
+  thread_local std::vector<int> faces;
+  cells_->cells.near_segment(a, b, cells_->cells.cell(), faces);
+  const V3 A = v3(a), B = v3(b), d = B - A;
+  const double len = d.norm();
+  // Values within a relative 1e-9 of zero count as meeting: a doubt is a meeting.
+  constexpr double kTolerance = 1e-9;
+  for (int f : faces) {
+    const auto& F = surface_.faces[std::size_t(f)];
+    const V3 P0 = v3(surface_.vertices[std::size_t(F[0])]), P1 = v3(surface_.vertices[std::size_t(F[1])]),
+             P2 = v3(surface_.vertices[std::size_t(F[2])]);
+    // The ends on one side of the face's plane: no meeting.
+    const V3 normal = (P1 - P0).cross(P2 - P0);
+    const double plane_tol = kTolerance * normal.norm() * (len + (P1 - P0).norm() + (P2 - P0).norm());
+    const double va = normal.dot(A - P0), vb = normal.dot(B - P0);
+    if ((va > plane_tol && vb > plane_tol) || (va < -plane_tol && vb < -plane_tol)) continue;
+    // The line misses the triangle unless it passes on one side of all three edges' planes through it.
+    const V3 Q[3] = {P0 - A, P1 - A, P2 - A};
+    bool positive = true, negative = true;
+    for (int k = 0; k < 3; ++k) {
+      const V3 &u = Q[k], &w = Q[(k + 1) % 3];
+      const double side = u.cross(w).dot(d), tol = kTolerance * u.norm() * w.norm() * len;
+      positive &= side > -tol, negative &= side < tol;
+    }
+    if (positive || negative) return false;
+  }
+  return true;
+}
+
 }  // namespace chokeloops

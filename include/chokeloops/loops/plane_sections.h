@@ -22,6 +22,8 @@ class SurfaceSections {
   explicit SurfaceSections(const SurfaceMesh& surface, const MeshAdjacency* adjacency = nullptr);
   ~SurfaceSections();
   Polyline3 around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius, bool by_ray = true) const;
+  // Whether the segment a-b meets no face of the surface (false when in doubt: a touch within rounding).
+  bool segment_clear(const std::array<double, 3>& a, const std::array<double, 3>& b) const;
 
  private:
   struct Cells;
