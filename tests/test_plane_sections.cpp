@@ -51,6 +51,18 @@ Counts compare_ray_with_plane(const Sdf& sdf, int n, std::uint64_t seed) {
   return counts;
 }
 
+// A torus of radii R and r round the unit cube's centre, sampled at 97^3, and its plane sections (built in
+// place: the sections keep a reference to the surface).
+struct TorusSections {
+  TorusSections(double R, double r)
+      : surface(extract_zero_surface(sample_field({97, 97, 97}, analytic::torus(R, r)))),
+        adjacency(build_adjacency(surface)),
+        sections(surface, &adjacency) {}
+  const SurfaceMesh surface;
+  const MeshAdjacency adjacency;
+  const SurfaceSections sections;
+};
+
 }  // namespace
 
 TEST(PlaneSections, FromARayEqualsTheWholePlanesCutOnAPiercedBlock) {
@@ -101,10 +113,8 @@ TEST(PlaneSections, FacesNearASegmentMissNoneWithinReach) {
 
 TEST(PlaneSections, SquareToATorusTubeIsACircleOfTheTubesRadius) {
   const double R = 0.3, r = 0.1;
-  const ScalarGrid grid = sample_field({97, 97, 97}, analytic::torus(R, r));
-  const SurfaceMesh surface = extract_zero_surface(grid);
-  const MeshAdjacency adjacency = build_adjacency(surface);
-  const SurfaceSections sections(surface, &adjacency);
+  const TorusSections torus(R, r);
+  const SurfaceSections& sections = torus.sections;
   for (int k = 0; k < 8; ++k) {
     const double t = 2 * M_PI * k / 8;
     const std::array<double, 3> core{0.5 + R * std::cos(t), 0.5 + R * std::sin(t), 0.5};
@@ -201,10 +211,8 @@ TEST(PlaneSections, ASegmentIsClearOnlyWhenNoFaceMeetsIt) {
 // of a skipped plane links the core an even number of times; the same for a tunnel cycle round the tube.
 TEST(PlaneSections, PlanesWhoseSectionsCannotLinkACycleOnceOnATorus) {
   const double R = 0.3, r = 0.1;
-  const ScalarGrid grid = sample_field({97, 97, 97}, analytic::torus(R, r));
-  const SurfaceMesh surface = extract_zero_surface(grid);
-  const MeshAdjacency adjacency = build_adjacency(surface);
-  const SurfaceSections sections(surface, &adjacency);
+  const TorusSections torus(R, r);
+  const SurfaceSections& sections = torus.sections;
   const std::array<double, 3> centre{0.5, 0.5, 0.5};
   const Polyline3 core = circle(centre, {1, 0, 0}, {0, 1, 0}, R, 240);
   const Polyline3 round_tube = circle({0.5 + R, 0.5, 0.5}, {1, 0, 0}, {0, 0, 1}, 0.2, 240);  // in the outside
