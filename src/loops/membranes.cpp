@@ -128,7 +128,9 @@ class LoopTracer {
     for (int attempt = 0; attempt < 48; ++attempt) {
       auto t_box = std::chrono::steady_clock::now();
       std::array<char, 6> open_sides{};
+      const int rejections_before = check.rejections;
       Attempt a = try_box(c, box, seed_r, false, raw, raw_path, check, open_sides);
+      const bool rejected_here = check.rejections > rejections_before;
       const int r = box.largest();
       if (debug_)
         std::fprintf(stderr, "membranes: %s %s depth %g box %d (%d %d %d / %d %d %d) seed %d: attempt %d, %.2f ms\n", to_string(c.side),
@@ -154,9 +156,11 @@ class LoopTracer {
       const bool contractible = a == Attempt::GrowContractible;
       // Where the curves were essential but linked a cycle of the other side, the flood by distance is meant
       // for something else (a flat core, whose curves are all contractible): the sections come first there,
-      // and the flood by distance only if none of them is the loop (on the pierced block this changed no loop).
+      // and the flood by distance is left for boxes whose curves were all contractible. (On the pierced block
+      // the three generators with no loop flooded the whole solid by distance twice after their sections,
+      // 0.8 s of the stage's CPU; no loop changed there, on the cage, fertility, Neptune or the grey-matter map.)
       if (contractible && check.rejected && !sections_tried && check.other_side && try_sections()) break;
-      if (contractible) {
+      if (contractible && !rejected_here) {
         only_contractible = true;
         a = try_box(c, box, seed_r, true, raw, raw_path, check, open_sides);
       }
@@ -274,6 +278,7 @@ class LoopTracer {
     const std::vector<const detail::SideCycle*>* other_side = nullptr;  // null: not checked
     const detail::SideCycle* own = nullptr;                              // the choke's own cycle, if it could be made
     bool rejected = false;  // an essential curve was turned down because it links one of them
+    int rejections = 0;     // how many were turned down so far (a box's own: the growth over its try_box)
   };
 
   // The edge paths along the two sides of an interface curve that crosses the surface edges `edges` (in
@@ -457,6 +462,7 @@ class LoopTracer {
         if (debug_) std::fprintf(stderr, "membranes:   links other-side cycle %d\n", k);
         if (k >= 0) {
           check.rejected = true;
+          ++check.rejections;
           continue;
         }
       }
