@@ -106,6 +106,10 @@ bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& c
     return out;
   };
   std::vector<std::size_t> odd = odd_groups();
+  // More odd groups than this (the grey-matter map's planes have at most 8) are left to the sections: the
+  // pairs' segments would cost more than they do.
+  constexpr std::size_t kMostOddGroups = 32;
+  if (odd.size() > kMostOddGroups) return false;
   for (std::size_t i = 0; i < odd.size(); ++i)
     for (std::size_t j = i + 1; j < odd.size(); ++j) join(odd[i], odd[j]);
   return odd_groups().empty();
