@@ -233,9 +233,14 @@ class LoopTracer {
       const bool other_start = !raw_path.empty() && (best.rings == 0 || (c.kind != Kind::Generator && best.length < 0.5 * loop.raw_length));
       if (other_start) {
         try {
-          ShortenResult snapped = shorten_polyline(S_, A_, raw, so);
-          slide(snapped);
-          if (snapped.rings > 0 && (best.rings == 0 || snapped.length < best.length)) best = std::move(snapped);
+          // Often the snapped points are the side path itself (150 of the grey-matter map's 424 second
+          // starts), whose loop `best` already is.
+          const std::vector<int> snapped_path = snap_polyline_to_edge_path(S_, A_, raw);
+          if (snapped_path != raw_path) {
+            ShortenResult snapped = shorten_loop(S_, A_, snapped_path, so);
+            slide(snapped);
+            if (snapped.rings > 0 && (best.rings == 0 || snapped.length < best.length)) best = std::move(snapped);
+          }
         } catch (const Error&) {
           // keep the side path's loop
         }
