@@ -159,7 +159,7 @@ class LoopTracer {
       // and the flood by distance is left for boxes whose curves were all contractible. (On the pierced block
       // the three generators with no loop flooded the whole solid by distance twice after their sections,
       // 0.8 s of the stage's CPU; no loop changed there, on the cage, fertility, Neptune or the grey-matter map.)
-      if (contractible && check.rejected && !sections_tried && check.other_side && try_sections()) break;
+      if (contractible && check.rejected() && !sections_tried && check.other_side && try_sections()) break;
       if (contractible && !rejected_here) {
         only_contractible = true;
         a = try_box(c, box, seed_r, true, raw, raw_path, check, open_sides);
@@ -170,7 +170,7 @@ class LoopTracer {
       // generators that met one ended in the plane sections after flooding the whole solid (0.4 s each),
       // and none found its loop in a bigger box: the sections come first, and the boxes grow on only if
       // none of them is the loop.
-      if (check.rejected && !sections_tried && check.other_side && try_sections()) break;
+      if (check.rejected() && !sections_tried && check.other_side && try_sections()) break;
       // A generator's membrane that has not closed on the surface in a box of kSectionsFirstVoxels is a sheet
       // spreading along walls: on the pierced block the 30 of 100 generators whose boxes grew past it flooded
       // on, most of them to the whole solid (0.5 s each on average), and 26 of those 30 ended in the plane
@@ -197,7 +197,7 @@ class LoopTracer {
     }
     if (!loop.found && check.other_side && !sections_tried) try_sections();
     if (!loop.found) {
-      loop.note = check.rejected ? "every essential interface curve of the membrane near the choke links a cycle of the other side: "
+      loop.note = check.rejected() ? "every essential interface curve of the membrane near the choke links a cycle of the other side: "
                                    "none bounds on its own side, so none is reported"
                   : only_contractible
                       ? "every interface curve of the membrane near the choke is contractible on the surface (a flat core, e.g. a thin wall)"
@@ -282,8 +282,10 @@ class LoopTracer {
   struct CurveCheck {
     const std::vector<const detail::SideCycle*>* other_side = nullptr;  // null: not checked
     const detail::SideCycle* own = nullptr;                              // the choke's own cycle, if it could be made
-    bool rejected = false;  // an essential curve was turned down because it links one of them
-    int rejections = 0;     // how many were turned down so far (a box's own: the growth over its try_box)
+    // Essential curves turned down so far because they link one of them (a box's own: the growth over its
+    // try_box).
+    int rejections = 0;
+    bool rejected() const { return rejections > 0; }
   };
 
   // The edge paths along the two sides of an interface curve that crosses the surface edges `edges` (in
@@ -466,7 +468,6 @@ class LoopTracer {
         const int k = detail::linked_cycle(candidates[i].curve, *check.other_side);
         if (debug_) std::fprintf(stderr, "membranes:   links other-side cycle %d\n", k);
         if (k >= 0) {
-          check.rejected = true;
           ++check.rejections;
           continue;
         }
