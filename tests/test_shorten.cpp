@@ -255,6 +255,34 @@ TEST(Shorten, NarrowBandFirstWidensOnlyAtItsEdge) {
   EXPECT_NEAR(settled.length, 2 * M_PI * 0.09, 0.05 * 2 * M_PI * 0.09);
 }
 
+// Where the bands wider than the narrow one wrap round the tube, the full band comes out the narrow band, and
+// its loop is the narrow band's loop, taken again without its searches: the same result, point for point, as
+// the full band alone.
+TEST(Shorten, AWidenedBandThatIsTheNarrowOneGivesItsLoop) {
+  const double R = 0.3, r = 0.02;
+  auto m = extract_zero_surface(sample_field({96, 96, 96}, analytic::torus(R, r)));
+  auto adj = build_adjacency(m);
+  Polyline3 wavy;  // round the hole on the tube's top, waving up and down its side
+  for (int i = 0; i < 300; ++i) {
+    const double t = 2 * M_PI * i / 300, v = 0.5 * M_PI + 0.6 * std::sin(5 * t);
+    wavy.push_back({0.5 + (R + r * std::cos(v)) * std::cos(t), 0.5 + (R + r * std::cos(v)) * std::sin(t), 0.5 + r * std::sin(v)});
+  }
+  const auto loop = snap_polyline_to_edge_path(m, adj, wavy);
+  ShortenOptions full{0, 12, 400}, narrow_first = full;
+  narrow_first.first_rings = 8;
+  const auto alone = shorten_loop(m, adj, loop, full);
+  const auto widened = shorten_loop(m, adj, loop, narrow_first);
+  ASSERT_GT(alone.rings, 0);
+  EXPECT_LE(alone.rings, 8);        // wider bands wrap round the tube
+  EXPECT_TRUE(alone.at_band_edge);  // so the narrow band's loop, at its edge too, was widened
+  EXPECT_EQ(widened.rings, alone.rings);
+  EXPECT_EQ(widened.edge_path, alone.edge_path);
+  EXPECT_EQ(widened.points, alone.points);
+  EXPECT_EQ(widened.length, alone.length);
+  EXPECT_EQ(widened.at_band_edge, alone.at_band_edge);
+  EXPECT_NEAR(alone.length, 2 * M_PI * (R - r), 0.05 * 2 * M_PI * (R - r));
+}
+
 // Step 3 starts from the band's shortest plane section near the edge loop's plane: the edge loop that step 2
 // finds a few edges from a tube's neck reaches it in a few swap rounds instead of one vertex row per round.
 TEST(Shorten, PlaneSectionsStartTheSwapsAtTheNeck) {

@@ -41,9 +41,20 @@ struct StepClock {
   }
 };
 
-// shorten_loop within a band of at most opt.max_rings rings.
+// A call's result with the band it came from: a later call on the same loop whose band is the same face
+// for face would compute the same result from step 2 on.
+struct BandResult {
+  ShortenResult result;
+  std::vector<int> band_faces;  // sorted; empty when no band was built
+  bool searched = false;        // step 2 found an edge loop (else the result is the input loop)
+};
+
+// shorten_loop within a band of at most opt.max_rings rings. `earlier`: a call on the same loop with other
+// options; where this call's band is its band, steps 2 and 3 are its, and only what depends on this call's
+// rings and distances (whether the loop is at the band's edge) is computed again.
 ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
-                              const ShortenOptions& opt) {
+                              const ShortenOptions& opt, const BandResult* earlier = nullptr,
+                              std::vector<int>* band_faces = nullptr, bool* searched = nullptr) {
   ShortenResult R;
   if (loop.empty()) throw Error("loop is empty");
   for (size_t i = 0; i < loop.size(); ++i) {
@@ -112,6 +123,29 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
   }
   R.rings = rings;
   if (!rings) return R;
+  // The test above builds each band it tries; the last one built is the band of `rings` rings.
+  if (band_faces) band_faces->assign(sh.band.faces.begin(), sh.band.faces.end());
+  // Step 2's loop is at the band's edge when a vertex of it lies in the band's last ring, or within two of
+  // its edges of max_move from the input loop.
+  const auto at_band_edge = [&](const std::vector<int>& path, double path_length) {
+    const double edge = path_length / double(path.size());  // the loop's mean edge length
+    double path_upper = 0;
+    for (int v : path) path_upper = std::max(path_upper, upper[std::size_t(rid.at(v))]);
+    if (distances && dist.empty() && path_upper > opt.max_move - 2 * edge) compute_distances();
+    for (int v : path) {
+      const std::size_t i = std::size_t(rid.at(v));
+      if (ring[i] >= rings - 1 || (!dist.empty() && dist[i] > opt.max_move - 2 * edge)) return true;
+    }
+    return false;
+  };
+  if (earlier && earlier->result.rings == rings && earlier->band_faces == sh.band.faces) {
+    // The widened band came out as the narrow one (on the grey-matter map 1,656 of 1,754 widenings: the
+    // wider bands wrap round or swallow a handle): the same band gives the same loop.
+    ShortenResult same = earlier->result;
+    if (earlier->searched) same.at_band_edge = at_band_edge(same.edge_path, same.edge_path_length);
+    if (debug) std::fprintf(stderr, "band of %d rings as before: its loop again\n", rings);
+    return same;
+  }
 
   // Step 2.
   clock.lap(StepClock::kBands);
@@ -171,21 +205,10 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
     s = sh.local_of(mid);
   }
   if (best.empty()) return R;
+  if (searched) *searched = true;
   R.edge_path = best;
   R.edge_path_length = best_len;
-  {
-    const double edge = best_len / double(best.size());  // the loop's mean edge length
-    double best_upper = 0;
-    for (int v : best) best_upper = std::max(best_upper, upper[std::size_t(rid.at(v))]);
-    if (distances && dist.empty() && best_upper > opt.max_move - 2 * edge) compute_distances();
-    for (int v : best) {
-      const std::size_t i = std::size_t(rid.at(v));
-      if (ring[i] >= rings - 1 || (!dist.empty() && dist[i] > opt.max_move - 2 * edge)) {
-        R.at_band_edge = true;
-        break;
-      }
-    }
-  }
+  R.at_band_edge = at_band_edge(best, best_len);
   R.points = loop_points(mesh, best);
   R.length = closed_length(R.points);
 
@@ -261,8 +284,8 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
   double Lp = closed_length(pts);
   clock.lap(StepClock::kPolish);
   if (debug) {
-    std::fprintf(stderr, "edge loop %.9f (%zu vertices), strip %zu faces, relaxed %.9f, polished %.9f; band %zu vertices, %d rings, %d descents\n", R.length,
-                 best.size(), S.size(), L, Lp, sh.band.global.size(), rings, descents);
+    std::fprintf(stderr, "edge loop %.9f (%zu vertices; input %.9f, %zu vertices%s), strip %zu faces, relaxed %.9f, polished %.9f; band %zu vertices, %d rings, %d descents\n", R.length,
+                 best.size(), R.input_length, loop.size(), R.at_band_edge ? ", at band edge" : "", S.size(), L, Lp, sh.band.global.size(), rings, descents);
     const auto& t = clock.ms;
     std::fprintf(stderr,
                  "shorten steps ms: region %.3f candidates %.3f bands %.3f arcs %.3f searches %.3f swaps %.3f (%d rounds) "
@@ -285,11 +308,13 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   if (opt.first_rings <= 0 || opt.first_rings >= opt.max_rings) return shorten_in_band(mesh, adj, loop, opt);
   ShortenOptions narrow = opt;
   narrow.max_rings = opt.first_rings;
-  ShortenResult first = shorten_in_band(mesh, adj, loop, narrow);
+  BandResult narrow_result;
+  narrow_result.result = shorten_in_band(mesh, adj, loop, narrow, nullptr, &narrow_result.band_faces, &narrow_result.searched);
+  const ShortenResult& first = narrow_result.result;
   if (first.rings > 0 && !first.at_band_edge) return first;
   // The wide band starts from the input loop again, so that max_move keeps its meaning; of two loops
   // in the class, the shorter.
-  ShortenResult wide = shorten_in_band(mesh, adj, loop, opt);
+  ShortenResult wide = shorten_in_band(mesh, adj, loop, opt, first.rings > 0 ? &narrow_result : nullptr);
   if (std::getenv("CHOKELOOPS_DEBUG_SHORTEN"))
     std::fprintf(stderr, "widened band: %d rings %.9f (at its edge: %d), %d rings %.9f\n", first.rings, first.length,
                  int(first.at_band_edge), wide.rings, wide.length);
