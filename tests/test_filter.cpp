@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 
 #include "analytic_fields.h"
+#include "chokeloops/analyze.h"
 #include "chokeloops/filter/filter.h"
 #include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/surface/surface.h"
@@ -316,6 +317,46 @@ TEST(MembraneVoxels, TheShapesFloodedTogetherAreTheShapesAlone) {
   }
   EXPECT_GE(compared, 20);
   EXPECT_GE(first_open, 1);  // the other shape's part of the shared floods is checked too
+}
+
+// The loop stage records where its floods leave each loop's label-volume membrane (AnalyzeOptions::
+// record_membranes): going on from there gives the membrane the whole sequence gives, note for note; many
+// records hold the closed membrane already, and one that does is taken as it is, with no flood.
+TEST(MembraneVoxels, GoingOnFromTheLoopStagesFloodsGivesTheSameMembranes) {
+  int compared = 0, recorded = 0, closed_in_loop_stage = 0;
+  for (const ScalarGrid& g : membrane_test_grids()) {
+    AnalyzeOptions o;
+    o.record_membranes = true;
+    const AnalyzeResult r = analyze_grid(g, o);
+    ASSERT_EQ(r.membranes.size(), r.loops.size());
+    const auto bounds = region_bounds(r.grid);
+    for (std::size_t i = 0; i < r.loops.size(); ++i) {
+      const Choke& c = r.loops[i].choke;
+      const LoopOptions lo = label_membrane_options(r.grid, c);
+      const MembraneVoxels fresh = closing_membrane_voxels(r.grid, c, lo, MembraneShape::Sheet, true, &bounds);
+      const MembraneVoxels resumed = closing_membrane_voxels(r.grid, c, lo, MembraneShape::Sheet, true, &bounds, &r.membranes[i]);
+      EXPECT_EQ(resumed.found, fresh.found);
+      EXPECT_EQ(resumed.shore, fresh.shore);
+      EXPECT_EQ(resumed.box_radius, fresh.box_radius);
+      EXPECT_EQ(resumed.note, fresh.note);
+      // Another choke's record is not this one's.
+      const MembraneProgress& other = r.membranes[(i + 1) % r.membranes.size()];
+      if (other.saddle != c.saddle)
+        EXPECT_EQ(closing_membrane_voxels(r.grid, c, lo, MembraneShape::Sheet, true, &bounds, &other).shore, fresh.shore);
+      ++compared;
+      recorded += r.membranes[i].attempts > 0;
+      // (A choke thinner than half a voxel takes its saddle alone first, before any flood.)
+      if (r.membranes[i].done && r.membranes[i].membrane[0].found && c.depth >= 0.5 * r.grid.voxel_size) {
+        ++closed_in_loop_stage;
+        MembraneProgress marked = r.membranes[i];
+        marked.membrane[0].shore = {-7};
+        EXPECT_EQ(closing_membrane_voxels(r.grid, c, lo, MembraneShape::Sheet, true, &bounds, &marked).shore, std::vector<Id>{-7});
+      }
+    }
+  }
+  EXPECT_GE(compared, 20);
+  EXPECT_GE(recorded, 20);
+  EXPECT_GE(closed_in_loop_stage, 5);
 }
 
 // Each side's bounds hold every vertex of its region and its neighbours, and nothing more.

@@ -9,6 +9,7 @@
 #include "chokeloops/field/levelset.h"
 #include "chokeloops/field/volume_field.h"
 #include "chokeloops/loops/input_loops.h"
+#include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/loops/membranes.h"
 #include "chokeloops/topology/persistence.h"
 #include "chokeloops/surface/surface.h"
@@ -27,6 +28,9 @@ struct AnalyzeOptions {
   // Mesh inputs: every loop also carried onto the input mesh and checked there (input_loops.h), written as
   // input_loops.json and input_loops.ply.
   bool input_loops = true;
+  // Keep where the loop stage's floods leave each choke's membrane (AnalyzeResult::membranes), for the label
+  // volumes of a volume input.
+  bool record_membranes = false;
 };
 
 struct AnalyzeResult {
@@ -38,6 +42,7 @@ struct AnalyzeResult {
   SurfaceMesh surface;
   SurfaceStats surface_stats;
   std::vector<Loop> loops;
+  std::vector<MembraneProgress> membranes;  // one per loop with AnalyzeOptions::record_membranes, else empty
   int input_genus = -1;                   // genus of a closed input mesh, -1 when unknown
   int resolution = 0;                     // voxels along the longest side actually used (0: voxel size given)
   std::vector<std::string> warnings;

@@ -277,95 +277,139 @@ MembraneVoxels nearby_pinch(const ScalarGrid& grid, const FreudenthalComplex& cx
 // read the same floods and differ only in what they take from a flooded box, so each comes out as it would
 // alone, and a choke whose sheet never closes (flooded up to the whole grid) pays for those floods once, not
 // twice. Stops at the first box where membrane[stop_at] closes. A flood that throws ends every shape still
-// open, with the error as its note (and in `failure`).
+// open, with the error as its note (and in `failure`). `from`: the sequence's first boxes, taken already.
 struct SheetAndPlane {
   std::array<MembraneVoxels, 2> membrane;
   std::exception_ptr failure;
 };
 
 SheetAndPlane sheet_and_plane(const ScalarGrid& grid, const FreudenthalComplex& cx, const Choke& c, const LoopOptions& options,
-                              const std::array<RegionBounds, 2>* bounds, std::array<bool, 2> open, int stop_at) {
+                              const std::array<RegionBounds, 2>* bounds, std::array<bool, 2> open, int stop_at,
+                              const MembraneProgress* from = nullptr) {
   SheetAndPlane out;
-  for (auto& m : out.membrane) m.note = "the membrane did not close near the choke";
-  const double h = grid.voxel_size;
-  const int full = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
-  int r = options.first_box_radius(c.depth, h);
-  int seed_r = options.seed_radius(c.depth, h);
-  const auto sc = cx.coords(c.saddle);
+  const bool resume = from && from->saddle == c.saddle && from->stop_at == stop_at && from->wanted == open;
+  detail::MembraneSequence sequence = resume ? detail::MembraneSequence(grid, c, options, *from)
+                                             : detail::MembraneSequence(grid, c, options, open, stop_at);
   static const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
-  for (int attempt = 0; attempt < 16 && (open[0] || open[1]); ++attempt) {
+  while (!sequence.done()) {
     detail::FloodBox box;
     detail::FloodOutcome outcome;
+    const int r = sequence.radius();
     try {
       const auto t_flood = std::chrono::steady_clock::now();
-      outcome = detail::flood_two_lobes(grid, cx, c, r, seed_r, false, box, bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
+      outcome = detail::flood_two_lobes(grid, cx, c, r, sequence.seed_radius(), false, box,
+                                        bounds ? &(*bounds)[c.side == Side::Handle ? 0 : 1] : nullptr);
       if (debug)
         std::fprintf(stderr, "membrane voxels: %s %s depth %g box %d: flood of %zu voxels, outcome %d, %.3f ms\n", to_string(c.side),
                      to_string(c.kind), c.depth, r, box.size(), int(outcome),
                      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_flood).count());
     } catch (const Error& e) {
       out.failure = std::current_exception();
-      for (int k = 0; k < 2; ++k)
-        if (open[std::size_t(k)]) out.membrane[std::size_t(k)].note = e.what();
+      sequence.fail(e.what());
       break;
     }
-    if (outcome == detail::FloodOutcome::Shrink) {
-      if (seed_r <= 1) break;
-      seed_r = seed_r * 2 / 3;
-      continue;
-    }
-    if (outcome == detail::FloodOutcome::Flooded && open[1]) {
-      MembraneVoxels& m = out.membrane[1];
-      const Sheet s = plane_piece(box, grid, sc, m.shore);
-      if (s == Sheet::AtGridBorder) {
-        m.note = "the cut plane reaches the side of the grid";
-        m.shore.clear();
-        open[1] = false;
-      } else if (s != Sheet::Open) {
-        m.found = !m.shore.empty();
-        m.box_radius = r;
-        if (m.found) m.note.clear();
-        open[1] = false;
-      }
-    }
-    if (outcome == detail::FloodOutcome::Flooded && open[0]) {
-      MembraneVoxels& m = out.membrane[0];
-      const std::int64_t start = start_of_sheet(box, {sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]});
-      std::vector<std::uint32_t> sheet;
-      const Sheet s = start < 0 ? Sheet::AtGridBorder
-                                : collect_sheet(box, grid, std::uint32_t(start), [&](std::uint32_t li) { return box.in_contact(li); }, sheet);
-      if (start < 0) {
-        m.note = "the two zones of the membrane flood never met";
-        open[0] = false;
-      } else if (s == Sheet::AtGridBorder) {
-        m.note = "the membrane reaches the side of the grid: it is not a disc bounded by the surface";
-        open[0] = false;
-      } else if (s != Sheet::Open) {
-        // Either shore alone separates the zones (every path from one to the other steps from a shore vertex
-        // of the first to one of the second): the smaller changes fewer voxels.
-        std::array<std::vector<std::uint32_t>, 2> shores;
-        for (std::uint32_t li : sheet) shores[box.zone(li) == 1 ? 0 : 1].push_back(li);
-        const int pick = shores[1].size() < shores[0].size() ? 1 : 0;
-        add_debris(box, grid, shores[pick]);
-        m.shore.clear();
-        for (std::uint32_t li : shores[pick]) m.shore.push_back(box.global(li));
-        std::sort(m.shore.begin(), m.shore.end());
-        m.found = !m.shore.empty();
-        m.box_radius = r;
-        if (m.found) m.note.clear();
-        open[0] = false;
-      }
-    }
-    if (out.membrane[std::size_t(stop_at)].found || !(open[0] || open[1])) break;
-    const int cap = options.max_box_radius > 0 ? std::min(full, options.max_box_radius) : full;
-    if (r >= cap) break;
-    r = std::min(cap, int(std::ceil(r * 1.8)));
-    if (2 * r >= full) r = cap;
+    sequence.take(outcome, box);
   }
+  out.membrane = sequence.release().membrane;
   return out;
 }
 
 }  // namespace
+
+namespace detail {
+
+MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, std::array<bool, 2> open,
+                                   int stop_at)
+    : grid_(grid), saddle_(FreudenthalComplex(grid.dims).coords(c.saddle)) {
+  full_ = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
+  cap_ = options.max_box_radius > 0 ? std::min(full_, options.max_box_radius) : full_;
+  p_.saddle = c.saddle;
+  for (auto& m : p_.membrane) m.note = "the membrane did not close near the choke";
+  p_.wanted = p_.open = open;
+  p_.stop_at = stop_at;
+  p_.radius = options.first_box_radius(c.depth, grid.voxel_size);
+  p_.seed_radius = options.seed_radius(c.depth, grid.voxel_size);
+  p_.done = !(open[0] || open[1]);
+}
+
+MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, const MembraneProgress& from)
+    : MembraneSequence(grid, c, options, from.wanted, from.stop_at) {
+  p_ = from;
+}
+
+void MembraneSequence::fail(const std::string& why) {
+  for (int k = 0; k < 2; ++k)
+    if (p_.open[std::size_t(k)]) p_.membrane[std::size_t(k)].note = why;
+  p_.done = true;
+}
+
+void MembraneSequence::take(FloodOutcome outcome, const FloodBox& box) {
+  constexpr int kMostBoxes = 16;
+  const int r = p_.radius;
+  auto& open = p_.open;
+  ++p_.attempts;
+  if (outcome == FloodOutcome::Shrink) {
+    if (p_.seed_radius <= 1) {
+      p_.done = true;
+      return;
+    }
+    p_.seed_radius = p_.seed_radius * 2 / 3;
+    p_.done = p_.attempts >= kMostBoxes;
+    return;
+  }
+  if (outcome == FloodOutcome::Flooded && open[1]) {
+    MembraneVoxels& m = p_.membrane[1];
+    const Sheet s = plane_piece(box, grid_, saddle_, m.shore);
+    if (s == Sheet::AtGridBorder) {
+      m.note = "the cut plane reaches the side of the grid";
+      m.shore.clear();
+      open[1] = false;
+    } else if (s != Sheet::Open) {
+      m.found = !m.shore.empty();
+      m.box_radius = r;
+      if (m.found) m.note.clear();
+      open[1] = false;
+    }
+  }
+  if (outcome == FloodOutcome::Flooded && open[0]) {
+    MembraneVoxels& m = p_.membrane[0];
+    const auto& sc = saddle_;
+    const std::int64_t start = start_of_sheet(box, {sc[0] - box.lo[0], sc[1] - box.lo[1], sc[2] - box.lo[2]});
+    std::vector<std::uint32_t> sheet;
+    const Sheet s = start < 0 ? Sheet::AtGridBorder
+                              : collect_sheet(box, grid_, std::uint32_t(start), [&](std::uint32_t li) { return box.in_contact(li); }, sheet);
+    if (start < 0) {
+      m.note = "the two zones of the membrane flood never met";
+      open[0] = false;
+    } else if (s == Sheet::AtGridBorder) {
+      m.note = "the membrane reaches the side of the grid: it is not a disc bounded by the surface";
+      open[0] = false;
+    } else if (s != Sheet::Open) {
+      // Either shore alone separates the zones (every path from one to the other steps from a shore vertex
+      // of the first to one of the second): the smaller changes fewer voxels.
+      std::array<std::vector<std::uint32_t>, 2> shores;
+      for (std::uint32_t li : sheet) shores[box.zone(li) == 1 ? 0 : 1].push_back(li);
+      const int pick = shores[1].size() < shores[0].size() ? 1 : 0;
+      add_debris(box, grid_, shores[pick]);
+      m.shore.clear();
+      for (std::uint32_t li : shores[pick]) m.shore.push_back(box.global(li));
+      std::sort(m.shore.begin(), m.shore.end());
+      m.found = !m.shore.empty();
+      m.box_radius = r;
+      if (m.found) m.note.clear();
+      open[0] = false;
+    }
+  }
+  if (p_.membrane[std::size_t(p_.stop_at)].found || !(open[0] || open[1]) || r >= cap_) {
+    p_.done = true;
+    return;
+  }
+  p_.radius = std::min(cap_, int(std::ceil(r * 1.8)));
+  if (2 * p_.radius >= full_) p_.radius = cap_;
+  p_.done = p_.attempts >= kMostBoxes;
+}
+
+}  // namespace detail
 
 MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneShape shape,
                                const std::array<RegionBounds, 2>* bounds) {
@@ -397,8 +441,15 @@ int membrane_box_cap(const ScalarGrid& grid, const Choke& choke, const LoopOptio
   return wide ? std::max(64, 16 * base) : std::max(16, 4 * base);
 }
 
+LoopOptions label_membrane_options(const ScalarGrid& grid, const Choke& choke) {
+  LoopOptions options;
+  options.max_box_radius = membrane_box_cap(grid, choke, options, true);
+  return options;
+}
+
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
-                                       MembraneShape first, bool saddle_alone, const std::array<RegionBounds, 2>* bounds) {
+                                       MembraneShape first, bool saddle_alone, const std::array<RegionBounds, 2>* bounds,
+                                       const MembraneProgress* from) {
   const bool sub_voxel = saddle_alone && choke.depth < 0.5 * grid.voxel_size;
   if (sub_voxel) {
     MembraneVoxels m = membrane_voxels(grid, choke, options, MembraneShape::Saddle, bounds);
@@ -406,7 +457,7 @@ MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& chok
   }
   // Both shapes from one sequence of floods: `first` if it closes, else the other (closed or not, with its note).
   const std::size_t k = first == MembraneShape::Plane ? 1 : 0;
-  SheetAndPlane both = sheet_and_plane(grid, FreudenthalComplex(grid.dims), choke, options, bounds, {true, true}, int(k));
+  SheetAndPlane both = sheet_and_plane(grid, FreudenthalComplex(grid.dims), choke, options, bounds, {true, true}, int(k), from);
   return std::move(both.membrane[both.membrane[k].found ? k : 1 - k]);
 }
 

@@ -41,6 +41,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <unordered_map>
 
 #include "chokeloops/topology/complex.h"
@@ -90,7 +91,22 @@ class LoopTracer {
       "shortest plane section, through the choke or square to its cycle, that is essential, links no cycle of the other "
       "side and links its own cycle once";
 
-  Loop trace(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle) const {
+  // `record`: where this loop's floods leave the choke's label-volume membrane (trace_loops).
+  Loop trace(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle, MembraneProgress* record) const {
+    // A choke's boxes are cubes grown as the label volumes grow theirs (a generator's first box too, and the
+    // next ones while its curves are contractible): the floods of its loop are the first floods of its
+    // membrane's sequence, as long as their boxes and seeds are that sequence's.
+    std::optional<detail::MembraneSequence> sequence;
+    if (record)
+      sequence.emplace(g_, c, label_membrane_options(g_, c), std::array<bool, 2>{true, true}, 0);
+    detail::MembraneSequence* feed = sequence ? &*sequence : nullptr;
+    Loop loop = trace_loop(c, options, own_cycle, feed);
+    if (sequence) *record = sequence->release();
+    return loop;
+  }
+
+ private:
+  Loop trace_loop(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle, detail::MembraneSequence*& feed) const {
     Loop loop;
     loop.choke = c;
     const double h = g_.voxel_size;
@@ -129,7 +145,7 @@ class LoopTracer {
       auto t_box = std::chrono::steady_clock::now();
       std::array<char, 6> open_sides{};
       const int rejections_before = check.rejections;
-      Attempt a = try_box(c, box, seed_r, false, raw, raw_path, check, open_sides);
+      Attempt a = try_box(c, box, seed_r, false, raw, raw_path, check, open_sides, feed);
       const bool rejected_here = check.rejections > rejections_before;
       const int r = box.largest();
       if (debug_)
@@ -162,7 +178,7 @@ class LoopTracer {
       if (contractible && check.rejected() && !sections_tried && check.other_side && try_sections()) break;
       if (contractible && !rejected_here) {
         only_contractible = true;
-        a = try_box(c, box, seed_r, true, raw, raw_path, check, open_sides);
+        a = try_box(c, box, seed_r, true, raw, raw_path, check, open_sides, feed);
       }
       if (a == Attempt::Found) { loop.found = true; loop.box_radius = r; break; }
       // An essential curve that links a cycle of the other side is a membrane spread along a wall beside
@@ -269,7 +285,6 @@ class LoopTracer {
     return loop;
   }
 
- private:
   // The grid vertices the box around `saddle` holds within the side's bounds (what its flood reads).
   double box_voxels(const detail::BoxExtent& box, const std::array<int, 3>& saddle, const detail::RegionBounds& bounds) const {
     std::array<int, 3> lo, hi;
@@ -314,8 +329,11 @@ class LoopTracer {
 
   // open_sides: set to the box's sides (below x y z, above x y z) where a curve through the choke runs out of
   // the box, when none closes there.
+  // `feed`: the choke's label-volume membrane sequence, given this box's flood when the box is its next one
+  // (else set to null: the sequences part there).
   Attempt try_box(const Choke& c, const detail::BoxExtent& extent, int seed_radius, bool by_distance, Polyline3& out,
-                  std::vector<int>& out_path, CurveCheck& check, std::array<char, 6>& open_sides) const {
+                  std::vector<int>& out_path, CurveCheck& check, std::array<char, 6>& open_sides,
+                  detail::MembraneSequence*& feed) const {
     const int r = extent.largest();
     const bool handle = c.side == Side::Handle;
     auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
@@ -325,6 +343,12 @@ class LoopTracer {
     if (debug_)
       std::fprintf(stderr, "membranes: %s %s depth %g box %d: flood of %zu voxels, %.3f ms\n", to_string(c.side), to_string(c.kind), c.depth, r,
                    box.size(), std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_flood).count());
+    // A flood by distance is not one of the sequence's (it floods its box once more, in another order).
+    if (feed && !feed->done() && !by_distance) {
+      const bool cube = extent.smallest() == r && extent.largest() == r;
+      if (cube && r == feed->radius() && seed_radius == feed->seed_radius()) feed->take(flooded, box);
+      else feed = nullptr;
+    }
     switch (flooded) {
       case detail::FloodOutcome::Grow: return Attempt::Grow;
       case detail::FloodOutcome::Shrink: return Attempt::Shrink;
@@ -523,7 +547,9 @@ void describe_loop(Loop& loop) {
 }
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
-                              const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology, int genus) {
+                              const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology, int genus,
+                              std::vector<MembraneProgress>* membranes) {
+  if (membranes) membranes->assign(chokes.size(), MembraneProgress{});
   // Every generator's cycle, once: each generator's loop is checked against the other side's.
   const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
   auto t_stage = std::chrono::steady_clock::now();
@@ -581,7 +607,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     const std::size_t i = std::size_t(picked);
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr);
+      loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr, membranes ? &(*membranes)[i] : nullptr);
     } catch (const Error& e) {
       loops[i] = Loop{};
       loops[i].choke = chokes[i];

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -118,5 +119,32 @@ inline std::array<double, 3> edge_midpoint(const SurfaceMesh& surface, std::int6
 void mark_open_sides(const ScalarGrid& grid, const SurfaceMesh& surface, const InterfaceSegments& segments,
                      const SegmentsAtEdge& at, const FloodBox& box, const std::array<double, 3>& point, double near,
                      std::array<char, 6>& open_sides);
+
+// The box sequence of closing_membrane_voxels for one choke: which box to flood next (cubes from
+// LoopOptions::first_box_radius, x1.8 up to the options' cap, a smaller seed where the seeds touch) and what
+// each flooded box gives its Sheet and Plane membranes. The label volumes run it; the loop tracer feeds it
+// the floods of its own first boxes while they are the same boxes (MembraneProgress).
+class MembraneSequence {
+ public:
+  MembraneSequence(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, std::array<bool, 2> open,
+                   int stop_at);
+  // Goes on from `from`, recorded for this choke with the same options and shapes.
+  MembraneSequence(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, const MembraneProgress& from);
+  bool done() const { return p_.done; }
+  int radius() const { return p_.radius; }
+  int seed_radius() const { return p_.seed_radius; }
+  // The outcome of flooding the box radius() with seed_radius(); `box` is read when it was flooded.
+  void take(FloodOutcome outcome, const FloodBox& box);
+  // That flood threw: each open shape ends with `why` as its note.
+  void fail(const std::string& why);
+  const MembraneProgress& progress() const { return p_; }
+  MembraneProgress release() { return std::move(p_); }
+
+ private:
+  const ScalarGrid& grid_;
+  std::array<int, 3> saddle_;  // grid coordinates
+  int full_, cap_;
+  MembraneProgress p_;
+};
 
 }  // namespace chokeloops::detail

@@ -92,7 +92,8 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   prepare_loops(r, std::move(adjacency), std::move(face_label), context);
   if (std::getenv("CHOKELOOPS_DEBUG_MEMBRANES")) std::fprintf(stderr, "loop stage: prepare %.0f ms\n", ms_since(t));
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
-                        r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1);
+                        r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1,
+                        options.record_membranes ? &r.membranes : nullptr);
   r.timings_ms["loops"] = ms_since(t);
   t = Clock::now();
   if (context.topology && options.check_generators) drop_contractible_generators(r.loops, *context.topology);

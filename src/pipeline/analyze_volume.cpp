@@ -32,7 +32,10 @@ VolumeAnalysis analyze_volume(const VolumeImage& image, const VolumeFieldOptions
   if (field.has_label) what << "label " << field.label;
   else what << "iso " << field.iso << (field.inside_below ? " (inside below)" : "");
   a.what = what.str();
-  a.result = analyze_grid(std::move(vf.grid), options, progress, image.path);
+  // The label volumes (write_loop_volumes) go on from the loop stage's floods.
+  AnalyzeOptions with_membranes = options;
+  with_membranes.record_membranes = true;
+  a.result = analyze_grid(std::move(vf.grid), with_membranes, progress, image.path);
   AnalyzeResult& r = a.result;
   r.frame = vf.frame;
   r.timings_ms["levelset"] = levelset_ms;
@@ -118,11 +121,12 @@ LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image
   // Each loop's own membrane, independent of the others.
   std::vector<MembraneVoxels> shores(r.loops.size());
   const std::array<RegionBounds, 2> bounds = region_bounds(r.grid);
+  // The loop stage flooded the first boxes of many chokes' sequences already (AnalyzeResult::membranes).
   tbb::parallel_for(std::size_t(0), r.loops.size(), [&](std::size_t i) {
     if (!r.loops[i].found) return;
-    LoopOptions lo;
-    lo.max_box_radius = membrane_box_cap(r.grid, r.loops[i].choke, lo, true);
-    shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, lo, MembraneShape::Sheet, true, &bounds);
+    const MembraneProgress* from = i < r.membranes.size() ? &r.membranes[i] : nullptr;
+    shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, label_membrane_options(r.grid, r.loops[i].choke),
+                                        MembraneShape::Sheet, true, &bounds, from);
   });
   const FreudenthalComplex cx(r.grid.dims);
   LoopVolumes out;

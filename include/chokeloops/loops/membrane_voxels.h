@@ -50,13 +50,33 @@ MembraneVoxels membrane_voxels(const ScalarGrid& grid, const Choke& choke, const
                                MembraneShape shape = MembraneShape::Sheet,
                                const std::array<RegionBounds, 2>* bounds = nullptr);
 
+// The Sheet and Plane membranes of a choke as far as the first boxes of closing_membrane_voxels's sequence
+// took them, and the box it goes on with. The loop stage floods a choke's first boxes in that sequence too
+// (trace_loops can record what they gave): the label volumes then go on from there instead of flooding
+// those boxes again.
+struct MembraneProgress {
+  Id saddle = -1;                          // the choke's; -1: nothing recorded
+  std::array<MembraneVoxels, 2> membrane;  // [Sheet, Plane], each closed or not yet
+  std::array<bool, 2> wanted{true, true};  // the shapes the sequence is for
+  std::array<bool, 2> open{true, true};    // of those, the ones still to be closed
+  int stop_at = 0;                         // the shape whose closing ends the sequence
+  int radius = 0, seed_radius = 0;         // the next box's half-size and seed radius, in voxels
+  int attempts = 0;                        // boxes flooded so far (a seed that touched its twin counts)
+  bool done = false;                       // the sequence has ended: `membrane` is final
+};
+
+// The options the label volumes grow a choke's membrane with: the defaults, capped at membrane_box_cap(wide).
+LoopOptions label_membrane_options(const ScalarGrid& grid, const Choke& choke);
+
 // The first membrane that closes: `first` (Sheet or Plane), then the other of the two. A choke thinner than
 // half a voxel tries its saddle alone before both (a flood around noise would grow to the whole grid) and
 // only then (unless `saddle_alone` is false). A membrane that throws counts as not closing; the last note
-// says why none did. `bounds` as for membrane_voxels.
+// says why none did. `bounds` as for membrane_voxels. `from`: where the floods of this choke's sequence (same
+// options, `first`) stand already (trace_loops); the result is the same with it or without.
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options = {},
                                        MembraneShape first = MembraneShape::Sheet, bool saddle_alone = true,
-                                       const std::array<RegionBounds, 2>* bounds = nullptr);
+                                       const std::array<RegionBounds, 2>* bounds = nullptr,
+                                       const MembraneProgress* from = nullptr);
 
 // The largest box half-size (voxels) a membrane of `choke` grows to where it must stay near it: a few times
 // the box its depth asks for (LoopOptions::box_factor, box_margin), at least 16 voxels; `wide`: 16 times

@@ -49,6 +49,7 @@ struct Loop {
 void describe_loop(Loop& loop);
 
 class SurfaceTopology;
+struct MembraneProgress;
 
 // Loops of all chokes, computed in parallel; the result does not depend on the thread count. With a
 // topology of `surface`, a generator's loop is chosen among its membrane's interface curves as the nearest
@@ -57,8 +58,13 @@ class SurfaceTopology;
 // the nearest. `genus`: the surface's genus, when `chokes` hold every generator of the surface; the
 // generator loops of each side are then also checked to be independent, and one that is not is reported
 // missing with a note (the cycles of a side span its homology only when every generator is there).
+// `membranes`: when given, one per choke, where the floods of each choke's loop leave the sequence of boxes
+// its label-volume membrane grows in (closing_membrane_voxels with label_membrane_options), so that those
+// boxes are not flooded twice: a choke's boxes are that sequence's up to the cap, a generator's as long as
+// they grow as cubes.
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options = {},
-                              SurfaceTopology* topology = nullptr, int genus = -1);
+                              SurfaceTopology* topology = nullptr, int genus = -1,
+                              std::vector<MembraneProgress>* membranes = nullptr);
 
 }  // namespace chokeloops
