@@ -400,7 +400,19 @@ void MembraneSequence::take(FloodOutcome outcome, const FloodBox& box) {
       open[0] = false;
     }
   }
-  if (p_.membrane[std::size_t(p_.stop_at)].found || !(open[0] || open[1]) || r >= cap_) {
+  if (p_.membrane[std::size_t(p_.stop_at)].found) {
+    // Only the shape the sequence stops at is taken then (closing_membrane_voxels): a recorded sequence
+    // (MembraneProgress) does not keep the other's voxels until the label volumes are written.
+    MembraneVoxels& other = p_.membrane[std::size_t(1 - p_.stop_at)];
+    if (p_.wanted[std::size_t(1 - p_.stop_at)]) {
+      std::vector<Id>().swap(other.shore);
+      other.found = false;
+      other.note = "not kept: the other shape closed first";
+    }
+    p_.done = true;
+    return;
+  }
+  if (!(open[0] || open[1]) || r >= cap_) {
     p_.done = true;
     return;
   }

@@ -101,7 +101,7 @@ class LoopTracer {
       sequence.emplace(g_, c, label_membrane_options(g_, c), std::array<bool, 2>{true, true}, 0);
     detail::MembraneSequence* feed = sequence ? &*sequence : nullptr;
     Loop loop = trace_loop(c, options, own_cycle, feed);
-    if (sequence) *record = sequence->release();
+    if (sequence && loop.found) *record = sequence->release();  // the label volumes draw found loops only
     return loop;
   }
 
