@@ -50,28 +50,12 @@
 #include "chokeloops/loops/channels.h"
 #include "generator_class.h"
 #include "slide.h"
+#include "surface_interface.h"
 #include "two_lobe_flood.h"
 
 namespace chokeloops {
 
 namespace {
-
-// Per-vertex (or per-face) marks over the whole surface that a thread reuses from one flood to the next:
-// cleared by bumping a stamp, so that a small membrane on a surface of millions of vertices pays for the
-// vertices it labels, not for the surface.
-template <class T>
-struct StampedMarks {
-  std::vector<T> value;
-  std::vector<std::uint32_t> stamp;
-  std::uint32_t now = 0;
-  void reset(std::size_t n) {
-    if (stamp.size() < n) stamp.assign(n, 0), value.assign(n, T{});
-    if (++now == 0) std::fill(stamp.begin(), stamp.end(), 0), now = 1;
-  }
-  bool has(std::size_t i) const { return stamp[i] == now; }
-  T get(std::size_t i) const { return has(i) ? value[i] : T{}; }
-  void set(std::size_t i, T v) { stamp[i] = now, value[i] = v; }
-};
 
 // GrowContractible: curves closed near the choke, but (for a generator) each is contractible on the surface.
 enum class Attempt { Found, Grow, GrowContractible, Shrink };
@@ -80,7 +64,7 @@ class LoopTracer {
  public:
   LoopTracer(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology* topology,
              const std::array<std::vector<const detail::SideCycle*>, 2>* generator_cycles)
-      : g_(grid), f_(grid.values.data()), cx_(grid.dims), S_(surface), A_(adjacency), T_(topology), other_cycles_(generator_cycles),
+      : g_(grid), cx_(grid.dims), S_(surface), A_(adjacency), T_(topology), other_cycles_(generator_cycles),
         bounds_(detail::region_bounds(grid)), debug_(std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr),
         debug_far_curves_(std::getenv("CHOKELOOPS_DEBUG_FAR_CURVES") != nullptr) {}
 
@@ -303,30 +287,6 @@ class LoopTracer {
     bool rejected() const { return rejections > 0; }
   };
 
-  // The edge paths along the two sides of an interface curve that crosses the surface edges `edges` (in
-  // order round the curve), the shorter first (a side collapsed to fewer than 3 vertices last): of each
-  // edge, its end in that side's zone. Two edges crossed in turn share a face and the corner whose label
-  // differs from the other two: the ends on one side are that corner twice, or the face's other two
-  // corners, joined by its third edge; so the ends make an edge path without a search, in the faces the
-  // curve crosses (the curve's homotopy class, unless the side touches itself).
-  std::array<std::vector<int>, 2> label_side_paths(const std::vector<std::int64_t>& edges, const StampedMarks<std::int8_t>& label) const {
-    std::array<std::vector<int>, 2> paths;
-    std::array<double, 2> length{};
-    for (int side = 0; side < 2; ++side) {
-      std::vector<int>& path = paths[std::size_t(side)];
-      path.reserve(edges.size());
-      for (std::int64_t e : edges) {
-        const int a = int(e >> 32), b = int(e & 0xffffffff);
-        const int v = label.get(a) == side + 1 ? a : b;
-        if (path.empty() || path.back() != v) path.push_back(v);
-      }
-      remove_repeats_and_spurs(path);
-      length[std::size_t(side)] = path.size() < 3 ? std::numeric_limits<double>::infinity() : loop_length(S_, path);
-    }
-    if (length[1] < length[0]) std::swap(paths[0], paths[1]);
-    return paths;
-  }
-
   // open_sides: set to the box's sides (below x y z, above x y z) where a curve through the choke runs out of
   // the box, when none closes there.
   // `feed`: the choke's label-volume membrane sequence, given this box's flood when the box is its next one
@@ -336,7 +296,6 @@ class LoopTracer {
                   detail::MembraneSequence*& feed) const {
     const int r = extent.largest();
     const bool handle = c.side == Side::Handle;
-    auto region = [&](Id v) { return handle ? f_[v] <= 0 : f_[v] > 0; };
     detail::FloodBox box;
     const auto t_flood = std::chrono::steady_clock::now();
     const detail::FloodOutcome flooded = detail::flood_two_lobes(g_, cx_, c, extent, seed_radius, by_distance, box, &bounds_[handle ? 0 : 1]);
@@ -355,96 +314,28 @@ class LoopTracer {
       case detail::FloodOutcome::Flooded: break;
     }
 
-    // Label the surface vertices on the crossing edges by their region end.
-    // Flat arrays over the whole surface rather than hash maps: a big box has a million shore vertices.
-    static thread_local StampedMarks<std::int8_t> vertex_label;
-    vertex_label.reset(S_.vertices.size());
-    std::vector<int> labelled;
-    for (std::uint32_t xl : box.shore) {
-      const auto p = box.local(xl);
-      const std::array<int, 3> gp{box.lo[0] + p[0], box.lo[1] + p[1], box.lo[2] + p[2]};
-      const Id x = box.global(xl);
-      for (int nb = 0; nb < 14; ++nb) {
-        if (!cx_.neighbor_inside(gp, nb)) continue;
-        Id u = x + cx_.neighbor_delta(nb);
-        if (region(u)) continue;
-        int sv = surface_vertex_on_edge(S_, cx_.edge_id(x, u));
-        if (sv >= 0) {
-          if (vertex_label.get(sv) == 0) labelled.push_back(sv);
-          vertex_label.set(sv, std::int8_t(box.zone(xl)));
-        }
-      }
-    }
-
-    // Interface segments on faces whose vertices carry both labels; chain them into curves.
-    // Only faces whose corners carry both labels hold interface segments: a big box labels a million
-    // vertices, and sorting all their faces cost more than the flood.
-    std::vector<int> sorted_faces;
-    for (int v : labelled)
-      for (int q = A_.vf_start[v]; q < A_.vf_start[v + 1]; ++q) {
-        const auto& F = S_.faces[A_.vf[q]];
-        const std::int8_t a = vertex_label.get(F[0]), b = vertex_label.get(F[1]), c = vertex_label.get(F[2]);
-        if (a && b && c && !(a == b && b == c)) sorted_faces.push_back(A_.vf[q]);
-      }
-    std::sort(sorted_faces.begin(), sorted_faces.end());
-    sorted_faces.erase(std::unique(sorted_faces.begin(), sorted_faces.end()), sorted_faces.end());
-    detail::InterfaceSegments segments;
-    for (int fi : sorted_faces) {  // every corner labelled, both labels present (the filter above)
-      const auto& F = S_.faces[fi];
-      const std::array<std::int8_t, 3> l{vertex_label.get(F[0]), vertex_label.get(F[1]), vertex_label.get(F[2])};
-      std::array<std::int64_t, 2> seg;
-      int m = 0;
-      for (int q = 0; q < 3; ++q)
-        if (l[q] != l[(q + 1) % 3]) seg[m++] = detail::edge_key(F[q], F[(q + 1) % 3]);
-      segments.push_back(seg);
-    }
-    detail::SegmentsAtEdge at;
-    for (int i = 0; i < int(segments.size()); ++i)
-      for (auto e : segments[i]) {
-        auto it = at.find(e);
-        if (it == at.end()) at[e] = {i, -1};
-        else it->second[1] = i;
-      }
-    std::vector<char> used(segments.size(), 0);
+    // Where the zones meet on the surface; its closed curves near the choke are the candidates.
+    static thread_local detail::StampedMarks<std::int8_t> vertex_label;
+    detail::SurfaceInterface interface;
+    detail::surface_interface(g_, cx_, S_, A_, box, handle, vertex_label, interface);
     const double h = g_.voxel_size;
     struct Candidate { double distance; Polyline3 curve; std::vector<std::int64_t> edges; };
     std::vector<Candidate> candidates;
-    for (int start = 0; start < int(segments.size()); ++start) {
-      if (used[start]) continue;
-      Polyline3 curve;
-      std::vector<std::int64_t> edges;
-      std::int64_t first = segments[start][0], e = segments[start][1];
-      int seg = start;
-      bool closed = false;
-      curve.push_back(detail::edge_midpoint(S_, first));
-      edges.push_back(first);
-      used[seg] = 1;
-      for (;;) {
-        curve.push_back(detail::edge_midpoint(S_, e));
-        edges.push_back(e);
-        auto& pair = at[e];
-        int next = pair[0] == seg ? pair[1] : pair[0];
-        if (next < 0 || used[next]) break;
-        used[next] = 1;
-        seg = next;
-        e = segments[seg][0] == e ? segments[seg][1] : segments[seg][0];
-        if (e == first) { closed = true; break; }
-      }
-      if (!closed || curve.size() < 3) continue;
+    for (detail::InterfaceCurve& curve : interface.closed) {
       double d = 1e300;
-      for (auto& p : curve)
+      for (auto& p : curve.points)
         d = std::min(d, std::hypot(p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]));
       // Each far curve costs a flood of the surface's faces: asked for apart from the rest of the log.
       if (debug_far_curves_ && c.kind == Kind::Generator && d > c.depth + 4 * h && T_) {
         bool ct = true;
-        try { ct = T_->null_homologous(snap_polyline_to_edge_path(S_, A_, curve)); } catch (const Error&) {}
+        try { ct = T_->null_homologous(snap_polyline_to_edge_path(S_, A_, curve.points)); } catch (const Error&) {}
         std::fprintf(stderr, "membranes: %s generator depth %g box %d: far curve at %g, %zu points %s\n", to_string(c.side),
-                     c.depth, r, d, curve.size(), ct ? "null-homologous" : "ESSENTIAL");
+                     c.depth, r, d, curve.points.size(), ct ? "null-homologous" : "ESSENTIAL");
       }
-      if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve), std::move(edges)});
+      if (d <= c.depth + 4 * h) candidates.push_back({d, std::move(curve.points), std::move(curve.edges)});
     }
     if (candidates.empty()) {
-      detail::mark_open_sides(g_, S_, segments, at, box, c.point, c.depth + 4 * h, open_sides);
+      detail::mark_open_sides(g_, S_, interface.segments, interface.at, box, c.point, c.depth + 4 * h, open_sides);
       return Attempt::Grow;
     }
     // Nearest first; the curves come from sorted faces, so ties resolve the same way on every run.
@@ -452,7 +343,7 @@ class LoopTracer {
                      [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
     if (c.kind != Kind::Generator || !T_) {
       out = std::move(candidates[0].curve);
-      out_path = std::move(label_side_paths(candidates[0].edges, vertex_label)[0]);
+      out_path = std::move(detail::label_side_paths(S_, candidates[0].edges, vertex_label)[0]);
       if (out_path.size() < 3) out_path.clear();  // both sides collapsed: the curve is snapped instead
       return Attempt::Found;
     }
@@ -465,7 +356,7 @@ class LoopTracer {
       // a generator's curve must be non-null anyway: a disk across a handle cuts it, so its boundary cannot
       // separate the surface. The curve's edge paths (its two sides, then its points snapped) are asked in
       // turn: where the rim of a sub-voxel handle touches itself, one side can close up around nothing.
-      auto sides = label_side_paths(candidates[i].edges, vertex_label);
+      auto sides = detail::label_side_paths(S_, candidates[i].edges, vertex_label);
       std::vector<int> path;
       bool contractible = true;
       for (int k = 0; k < 3 && contractible; ++k) {
@@ -504,7 +395,6 @@ class LoopTracer {
   }
 
   const ScalarGrid& g_;
-  const float* f_;
   FreudenthalComplex cx_;
   const SurfaceMesh& S_;
   const MeshAdjacency& A_;
