@@ -459,11 +459,12 @@ LoopOptions label_membrane_options(const ScalarGrid& grid, const Choke& choke) {
   return options;
 }
 
+bool thinner_than_half_a_voxel(const ScalarGrid& grid, const Choke& choke) { return choke.depth < 0.5 * grid.voxel_size; }
+
 MembraneVoxels closing_membrane_voxels(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options,
                                        MembraneShape first, bool saddle_alone, const std::array<RegionBounds, 2>* bounds,
                                        const MembraneProgress* from) {
-  const bool sub_voxel = saddle_alone && choke.depth < 0.5 * grid.voxel_size;
-  if (sub_voxel) {
+  if (saddle_alone && thinner_than_half_a_voxel(grid, choke)) {
     MembraneVoxels m = membrane_voxels(grid, choke, options, MembraneShape::Saddle, bounds);
     if (m.found) return m;
   }

@@ -79,9 +79,10 @@ class LoopTracer {
   Loop trace(const Choke& c, const LoopOptions& options, const detail::SideCycle* own_cycle, MembraneProgress* record) const {
     // A choke's boxes are cubes grown as the label volumes grow theirs (a generator's first box too, and the
     // next ones while its curves are contractible): the floods of its loop are the first floods of its
-    // membrane's sequence, as long as their boxes and seeds are that sequence's.
+    // membrane's sequence, as long as their boxes and seeds are that sequence's. (A choke thinner than half a
+    // voxel gets its saddle alone there, no flood: nothing to record.)
     std::optional<detail::MembraneSequence> sequence;
-    if (record)
+    if (record && !thinner_than_half_a_voxel(g_, c))
       sequence.emplace(g_, c, label_membrane_options(g_, c), std::array<bool, 2>{true, true}, 0);
     detail::MembraneSequence* feed = sequence ? &*sequence : nullptr;
     Loop loop = trace_loop(c, options, own_cycle, feed);

@@ -68,6 +68,9 @@ struct MembraneProgress {
 // The options the label volumes grow a choke's membrane with: the defaults, capped at membrane_box_cap(wide).
 LoopOptions label_membrane_options(const ScalarGrid& grid, const Choke& choke);
 
+// A choke thinner than half a voxel (noise): closing_membrane_voxels takes its saddle alone, before any flood.
+bool thinner_than_half_a_voxel(const ScalarGrid& grid, const Choke& choke);
+
 // The first membrane that closes: `first` (Sheet or Plane), then the other of the two. A choke thinner than
 // half a voxel tries its saddle alone before both (a flood around noise would grow to the whole grid) and
 // only then (unless `saddle_alone` is false). A membrane that throws counts as not closing; the last note
