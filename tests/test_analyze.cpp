@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -302,4 +303,55 @@ TEST(AnalyzeAnalytic, CageHasALoopPerHandleAndNeckTheSameWithOneAndTwoThreads) {
   expect_valid_loops(r, false);
   std::string one = report_with_threads(field, 1), two = report_with_threads(field, 2);
   EXPECT_TRUE(one == two);
+}
+
+TEST(AnalyzeAnalytic, LoopStageReportsEachLoopAndStopsBetweenLoopsWhenAsked) {
+  // The loop stage tells the caller (its thread only) how far it is as loops finish, and a caller that asks
+  // to stop is heard at the next loop, not at the stage's end; the loops do not depend on being watched.
+  const ScalarGrid field = sample_field({64, 64, 64}, analytic::ball_and_stick_cage({3, 2, 2}));
+  const AnalyzeResult unwatched = analyze_grid(field, AnalyzeOptions{});
+  ASSERT_GE(unwatched.loops.size(), 10u);
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    std::vector<double> fractions;
+    const AnalyzeResult watched = analyze_grid(field, AnalyzeOptions{}, [&](const char* stage, double f) {
+      if (std::string(stage) == "loops") fractions.push_back(f);
+      return true;
+    });
+    ASSERT_EQ(watched.loops.size(), unwatched.loops.size());
+    for (std::size_t i = 0; i < watched.loops.size(); ++i) {
+      EXPECT_EQ(watched.loops[i].found, unwatched.loops[i].found) << i;
+      EXPECT_TRUE(watched.loops[i].points == unwatched.loops[i].points) << i;
+    }
+    // The stage's start, then one report per loop the calling thread finished (all of them with one thread),
+    // then the end.
+    ASSERT_GE(fractions.size(), 3u) << threads;
+    EXPECT_EQ(fractions.front(), 0.0);
+    EXPECT_EQ(fractions.back(), 1.0);
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+    if (threads == 1) {
+      EXPECT_EQ(fractions.size(), unwatched.loops.size() + 2);
+      EXPECT_DOUBLE_EQ(fractions[1], 1.0 / double(unwatched.loops.size()));
+    }
+
+    // Stopped at the first loop done: no other loop report comes, and the run throws "interrupted".
+    int reports_after_stop = 0;
+    double stopped_at = -1;
+    bool stopped = false;
+    try {
+      analyze_grid(field, AnalyzeOptions{}, [&](const char* stage, double f) {
+        if (std::string(stage) != "loops" || f == 0) return true;
+        if (stopped) ++reports_after_stop;
+        if (!stopped) stopped = true, stopped_at = f;
+        return false;
+      });
+      ADD_FAILURE() << "not interrupted";
+    } catch (const Error& e) {
+      EXPECT_STREQ(e.what(), "interrupted");
+    }
+    EXPECT_TRUE(stopped);
+    EXPECT_EQ(reports_after_stop, 0);
+    EXPECT_LT(stopped_at, 1.0);
+    if (threads == 1) EXPECT_DOUBLE_EQ(stopped_at, 1.0 / double(unwatched.loops.size()));
+  }
 }

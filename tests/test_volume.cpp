@@ -311,6 +311,31 @@ TEST(VolumeWorld, MembraneVolumeCutsTheHandleAndFillsTheTunnel) {
     EXPECT_EQ(after.surface_stats.components, 1);
     EXPECT_EQ(after.chokes.handle_generators, 0);
   }
+  // Watched, the label volumes report their loops' membranes as they finish and write the same files; asked
+  // to stop, they write none.
+  std::vector<double> fractions;
+  fs::create_directories(d / "watched");
+  write_loop_volumes(a, in, (d / "watched").string(), [&](const char* stage, double f) {
+    EXPECT_STREQ(stage, "label volumes");
+    fractions.push_back(f);
+    return true;
+  });
+  ASSERT_GE(fractions.size(), 2u);
+  EXPECT_EQ(fractions.front(), 0.0);
+  EXPECT_EQ(fractions.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  for (const auto& name : names) {
+    std::ifstream x(d / "out" / name, std::ios::binary), y(d / "watched" / name, std::ios::binary);
+    EXPECT_TRUE(std::equal(std::istreambuf_iterator<char>(x), {}, std::istreambuf_iterator<char>(y), {})) << name;
+  }
+  fs::create_directories(d / "stopped");
+  try {
+    write_loop_volumes(a, in, (d / "stopped").string(), [](const char*, double f) { return f == 0; });
+    ADD_FAILURE() << "not interrupted";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "interrupted");
+  }
+  EXPECT_TRUE(fs::is_empty(d / "stopped"));
   fs::remove_all(d);
 }
 

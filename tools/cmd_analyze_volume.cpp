@@ -83,8 +83,9 @@ VolumeAnalysis analyze_one(const VolumeImage& image, const VolumeFieldOptions& f
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   };
   auto t = std::chrono::steady_clock::now();
-  const LoopVolumes volumes = write_loop_volumes(a, image, outdir);
+  const LoopVolumes volumes = write_loop_volumes(a, image, outdir, progress);
   a.result.timings_ms["volumes"] = since(t);
+  if (progress) progress("done", 1);
   a.result.warnings.insert(a.result.warnings.end(), volumes.warnings.begin(), volumes.warnings.end());
   t = std::chrono::steady_clock::now();
   write_report(a.result, options, outdir);

@@ -35,6 +35,9 @@ struct LoopVolumes {
   std::vector<std::string> files;          // names within outdir: loops, membranes
   std::vector<std::string> warnings;       // traced loops whose membrane did not close, and why
 };
-LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir);
+// `progress`: as trace_loops's, with ("label volumes", the fraction of the loops whose membrane is done) on
+// the calling thread; returning false stops before the files are written (Error "interrupted").
+LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir,
+                               const ProgressFn& progress = {});
 
 }  // namespace chokeloops

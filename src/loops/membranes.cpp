@@ -42,6 +42,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <thread>
 #include <unordered_map>
 
 #include "chokeloops/topology/complex.h"
@@ -449,7 +450,7 @@ void describe_loop(Loop& loop) {
 
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options, SurfaceTopology* topology, int genus,
-                              std::vector<MembraneProgress>* membranes) {
+                              std::vector<MembraneProgress>* membranes, const ProgressFn& progress) {
   if (membranes) membranes->assign(chokes.size(), MembraneProgress{});
   // Every generator's cycle, once: each generator's loop is checked against the other side's.
   const bool debug = std::getenv("CHOKELOOPS_DEBUG_MEMBRANES") != nullptr;
@@ -489,6 +490,12 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     if (chokes[i].kind != Kind::Generator) chokes_only.push_back(i);
   std::unique_ptr<std::atomic<char>[]> taken(new std::atomic<char>[chokes.size()]());
   std::atomic<std::size_t> next{0}, next_choke{0};
+  // A big map's stage runs for tens of seconds (the grey-matter map's 1,938 loops, a membrane protein's
+  // thousands): its progress goes out as loops finish, and a caller that asks to stop (Ctrl-C in Python) is
+  // heard between loops rather than at the stage's end.
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<std::size_t> finished{0};
+  std::atomic<bool> stop{false};
   auto take = [&](std::atomic<std::size_t>& cursor, const std::vector<std::size_t>& list) -> std::ptrdiff_t {
     for (std::size_t k = cursor++; k < list.size(); k = cursor++)
       if (!taken[list[k]].exchange(1)) return std::ptrdiff_t(list[k]);
@@ -502,6 +509,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
      basis_ready = true;
    }
    for (;;) {
+    if (stop) break;
     std::ptrdiff_t picked = basis_ready ? -1 : take(next_choke, chokes_only);
     if (picked < 0) picked = take(next, order);
     if (picked < 0) break;
@@ -515,9 +523,14 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
       loops[i].note = std::string("no loop: ") + e.what();
     }
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const std::size_t done = ++finished;
+    if (progress && std::this_thread::get_id() == caller && !progress("loops", double(done) / double(chokes.size())))
+      stop = true;
    }
   }, tbb::simple_partitioner());
   release_shortening_scratch();
+  if (stop) throw Error("interrupted");
+  if (progress && !chokes.empty() && !progress("loops", 1.0)) throw Error("interrupted");
   if (debug) {
     double sum = 0, mx = 0;
     for (const Loop& l : loops) sum += l.trace_ms, mx = std::max(mx, l.trace_ms);

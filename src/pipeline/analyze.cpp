@@ -93,7 +93,7 @@ AnalyzeResult analyze_grid(ScalarGrid grid, const AnalyzeOptions& options, const
   if (std::getenv("CHOKELOOPS_DEBUG_MEMBRANES")) std::fprintf(stderr, "loop stage: prepare %.0f ms\n", ms_since(t));
   r.loops = trace_loops(r.grid, r.surface, context.adjacency, r.chokes.chokes, options.loops, context.topology.get(),
                         r.surface_stats.closed_manifold && r.loops_omitted == 0 ? int(r.surface_stats.genus) : -1,
-                        options.record_membranes ? &r.membranes : nullptr);
+                        options.record_membranes ? &r.membranes : nullptr, progress);
   r.timings_ms["loops"] = ms_since(t);
   t = Clock::now();
   if (context.topology && options.check_generators) drop_contractible_generators(r.loops, *context.topology);

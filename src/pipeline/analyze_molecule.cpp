@@ -195,7 +195,7 @@ MoleculeAnalysis analyze_molecule(const std::string& path, const AnalyzeOptions&
     }
     rest.push_back(r.chokes.chokes[i]), rest_index.push_back(i);
   }
-  std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology);
+  std::vector<Loop> traced = trace_loops(r.grid, r.surface, adjacency, rest, analyze.loops, topology, -1, nullptr, progress);
   for (std::size_t k = 0; k < traced.size(); ++k) r.loops[rest_index[k]] = std::move(traced[k]);
   r.timings_ms["loops"] = ms(t);
   t = Clock::now();

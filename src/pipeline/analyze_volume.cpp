@@ -1,11 +1,13 @@
 #include "chokeloops/analyze_volume.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
@@ -83,7 +85,8 @@ std::vector<int> topology_defects(const AnalyzeResult& r, int expected_genus) {
   return std::vector<int>(gens.begin() + std::max(0, expected_genus), gens.end());
 }
 
-LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir) {
+LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image, const std::string& outdir,
+                               const ProgressFn& progress) {
   const AnalyzeResult& r = a.result;
   // Positions are in the grid frame (mm along the image's axes, image voxel (0,0,0) at 0), whether or not the
   // grid was resampled from the image.
@@ -122,12 +125,24 @@ LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image
   std::vector<MembraneVoxels> shores(r.loops.size());
   const std::array<RegionBounds, 2> bounds = region_bounds(r.grid);
   // The loop stage flooded the first boxes of many chokes' sequences already (AnalyzeResult::membranes).
+  // Progress and a request to stop go through the calling thread, as in the loop stage (the grey-matter
+  // map's membranes take seconds).
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<std::size_t> finished{0};
+  std::atomic<bool> stop{false};
+  if (progress && !progress("label volumes", 0)) throw Error("interrupted");
   tbb::parallel_for(std::size_t(0), r.loops.size(), [&](std::size_t i) {
-    if (!r.loops[i].found) return;
-    const MembraneProgress* from = i < r.membranes.size() ? &r.membranes[i] : nullptr;
-    shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, label_membrane_options(r.grid, r.loops[i].choke),
-                                        MembraneShape::Sheet, true, &bounds, from);
+    if (stop) return;
+    if (r.loops[i].found) {
+      const MembraneProgress* from = i < r.membranes.size() ? &r.membranes[i] : nullptr;
+      shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, label_membrane_options(r.grid, r.loops[i].choke),
+                                          MembraneShape::Sheet, true, &bounds, from);
+    }
+    const std::size_t done = ++finished;
+    if (progress && std::this_thread::get_id() == caller && !progress("label volumes", double(done) / double(r.loops.size())))
+      stop = true;
   });
+  if (stop || (progress && !progress("label volumes", 1))) throw Error("interrupted");
   const FreudenthalComplex cx(r.grid.dims);
   LoopVolumes out;
   for (std::size_t i = 0; i < shores.size(); ++i) {

@@ -62,9 +62,13 @@ struct MembraneProgress;
 // its label-volume membrane grows in (closing_membrane_voxels with label_membrane_options), so that those
 // boxes are not flooded twice: a choke's boxes are that sequence's up to the cap, a generator's as long as
 // they grow as cubes.
+// `progress`: called on the calling thread only (the hooks of the CLI and of Python are not made for others)
+// with ("loops", the fraction of the chokes whose loop is done) each time it finishes one, and with 1 at the
+// end. Returning false stops the stage: the loops under way finish, no other one starts, and Error
+// "interrupted" is thrown. The loops do not depend on it.
 std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                               const std::vector<Choke>& chokes, const LoopOptions& options = {},
                               SurfaceTopology* topology = nullptr, int genus = -1,
-                              std::vector<MembraneProgress>* membranes = nullptr);
+                              std::vector<MembraneProgress>* membranes = nullptr, const ProgressFn& progress = {});
 
 }  // namespace chokeloops
