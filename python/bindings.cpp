@@ -17,6 +17,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include <tbb/global_control.h>
@@ -120,12 +121,16 @@ std::unique_ptr<tbb::global_control> limit_threads(int n) {
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(n));
 }
 
-// Ctrl-C: the engine asks between stages whether to go on; this looks at Python's signals then.
+// Ctrl-C and the caller's progress callback: the engine asks between stages, and between loops in the loop
+// stage, whether to go on; this looks at Python's signals then and hands (stage, fraction) to the callback.
+// An exception the callback raises stops the analysis and comes out of analyze() as it was raised.
 struct Interrupt {
   bool interrupted = false;
   std::thread::id owner = std::this_thread::get_id();
+  py::object callback;                           // None, or callable(stage, fraction)
+  std::optional<py::error_already_set> raised;   // what the callback raised
   ProgressFn fn() {
-    return [this](const char*, double) {
+    return [this](const char* stage, double fraction) {
       if (std::this_thread::get_id() != owner) return true;
       py::gil_scoped_acquire gil;
       if (PyErr_CheckSignals() != 0) {
@@ -133,11 +138,25 @@ struct Interrupt {
         interrupted = true;
         return false;
       }
+      if (callback && !callback.is_none()) {
+        try {
+          callback(stage, fraction);
+        } catch (py::error_already_set& e) {
+          raised.emplace(std::move(e));
+          return false;
+        }
+      }
       return true;
     };
   }
-  // Called with the GIL held, after the computation threw: a KeyboardInterrupt rather than an Error.
+  // Called with the GIL held, after the computation threw: the callback's exception, or a KeyboardInterrupt,
+  // rather than an Error.
   void rethrow_if_interrupted() {
+    if (raised) {
+      py::error_already_set e = std::move(*raised);
+      raised.reset();
+      throw e;
+    }
     if (!interrupted) return;
     PyErr_SetNone(PyExc_KeyboardInterrupt);
     throw py::error_already_set();
@@ -279,10 +298,19 @@ AnalyzeResult analyze_mesh(const TriangleMesh& mesh, const AnalyzeOptions& optio
 }
 
 std::shared_ptr<Result> py_analyze(py::handle src, py::kwargs kw) {
+  // progress: analyze()'s own keyword (the other functions have no stages to report).
+  py::object progress = py::none();
+  if (kw.contains("progress")) {
+    progress = kw["progress"];
+    PyDict_DelItemString(kw.ptr(), "progress");
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+      throw py::type_error("progress must be a callable taking (stage, fraction)");
+  }
   Settings s = settings(kw);
   auto out = std::make_shared<Result>();
   out->options = s.analyze;
   Interrupt interrupt;
+  interrupt.callback = progress;
   SourceKind kind = source_kind(src);
   try {
     if (kind == SourceKind::Path) {

@@ -50,6 +50,9 @@ def analyze(source, voxel_size=None, origin=None, **options):
     """Every stage on a path (mesh or .vdb), a (V, F) pair of arrays, or a signed distance array.
 
     For an array, voxel_size and origin place it in space (a Grid from levelset() carries its own).
+    progress: a callable (stage, fraction), called on this thread as stages start ("levelset",
+    "persistence", "chokes", "surface", "loops", "done") and as each stage goes on (the loop stage at each
+    loop done, ending at 1); an exception it raises stops the analysis and comes out of analyze() unchanged.
     Returns a Result: .loops, .surface, .diagram, .handle_diagram, .tunnel_diagram, .warnings, .genus,
     .sdf, .to_json(), .write(outdir).
     """

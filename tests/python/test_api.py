@@ -182,3 +182,34 @@ def test_threads_run_concurrently_and_agree():
     for t in threads:
         t.join()
     assert out[0].to_json().split('"timings_ms"')[0] == out[1].to_json().split('"timings_ms"')[0]
+
+
+def test_progress_callback_sees_each_stage_and_its_exception_stops_the_analysis():
+    sdf, h, origin = torus_sdf(48)
+    seen = []
+    watched = chokeloops.analyze(sdf, voxel_size=h, origin=origin, threads=1,
+                                 progress=lambda stage, fraction: seen.append((stage, fraction)))
+    stages = [s for s, _ in seen]
+    assert stages[-1] == "done"
+    for stage in ("persistence", "chokes", "surface", "loops"):
+        assert stage in stages
+    loops = [f for s, f in seen if s == "loops"]
+    # the stage's start, one report per loop (one thread: the calling one finishes them all), the end
+    assert loops[0] == 0 and loops[-1] == 1 and loops == sorted(loops) and len(loops) == len(watched.loops) + 2
+    plain = chokeloops.analyze(sdf, voxel_size=h, origin=origin, threads=1)
+    assert [l["length"] for l in watched.loops] == [l["length"] for l in plain.loops]
+
+    class Stop(Exception):
+        pass
+
+    def stop_in_the_loop_stage(stage, fraction):
+        if stage == "loops" and fraction > 0:
+            raise Stop(fraction)
+
+    with pytest.raises(Stop) as stopped:
+        chokeloops.analyze(sdf, voxel_size=h, origin=origin, threads=1, progress=stop_in_the_loop_stage)
+    assert stopped.value.args[0] == pytest.approx(1 / len(plain.loops))
+    with pytest.raises(TypeError, match="progress"):
+        chokeloops.analyze(sdf, voxel_size=h, origin=origin, progress=3)
+    with pytest.raises(TypeError):
+        chokeloops.levelset(str(MESHES / "3holes_libigl.off"), progress=print)
