@@ -351,6 +351,13 @@ TEST(AnalyzeAnalytic, LoopStageReportsEachLoopAndStopsBetweenLoopsWhenAsked) {
     }
     EXPECT_TRUE(stopped);
     EXPECT_EQ(reports_after_stop, 0);
+    // A hook that throws instead: its own exception comes out.
+    struct HookThrew {};
+    EXPECT_THROW(analyze_grid(field, AnalyzeOptions{}, [](const char* stage, double f) {
+                   if (std::string(stage) == "loops" && f > 0) throw HookThrew{};
+                   return true;
+                 }),
+                 HookThrew);
     EXPECT_LT(stopped_at, 1.0);
     if (threads == 1) EXPECT_DOUBLE_EQ(stopped_at, 1.0 / double(unwatched.loops.size()));
   }

@@ -38,6 +38,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -496,6 +497,8 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
   const std::thread::id caller = std::this_thread::get_id();
   std::atomic<std::size_t> finished{0};
   std::atomic<bool> stop{false};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
   auto take = [&](std::atomic<std::size_t>& cursor, const std::vector<std::size_t>& list) -> std::ptrdiff_t {
     for (std::size_t k = cursor++; k < list.size(); k = cursor++)
       if (!taken[list[k]].exchange(1)) return std::ptrdiff_t(list[k]);
@@ -505,7 +508,14 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
   // raw segmentation) is reported without a loop; it does not stop the others.
   tbb::parallel_for(0, workers, [&](int worker) {
    if (worker == 0 && build_basis) {
-     topology->prepare_homology();
+     try {
+       topology->prepare_homology();
+     } catch (...) {
+       std::lock_guard<std::mutex> lock(failure_mutex);
+       if (!failure) failure = std::current_exception();
+       stop = true;
+       return;
+     }
      basis_ready = true;
    }
    for (;;) {
@@ -521,14 +531,29 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
       loops[i] = Loop{};
       loops[i].choke = chokes[i];
       loops[i].note = std::string("no loop: ") + e.what();
+    } catch (...) {
+      // Anything else (memory running out) ends the stage: the other workers stop at their next loop, rather
+      // than trace the rest of the list before the exception reaches the caller.
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      stop = true;
+      break;
     }
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const std::size_t done = ++finished;
-    if (progress && std::this_thread::get_id() == caller && !progress("loops", double(done) / double(chokes.size())))
-      stop = true;
+    if (progress && std::this_thread::get_id() == caller) {
+      try {
+        if (!progress("loops", double(done) / double(chokes.size()))) stop = true;
+      } catch (...) {  // a hook that throws rather than answer false: its exception, as promptly
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        stop = true;
+      }
+    }
    }
   }, tbb::simple_partitioner());
   release_shortening_scratch();
+  if (failure) std::rethrow_exception(failure);
   if (stop) throw Error("interrupted");
   if (progress && !chokes.empty() && !progress("loops", 1.0)) throw Error("interrupted");
   if (debug) {
