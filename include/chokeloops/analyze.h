@@ -56,6 +56,9 @@ struct AnalyzeResult {
 };
 
 // Runs every stage on a file (mesh or .vdb). Throws Error (2 bad input, 3 resources).
+// `progress` hears each stage start ("levelset", "persistence", "chokes", "surface", "loops", "done") and the
+// persistence's and loop stage's fractions (the loop stage's on the calling thread, at each loop done); false
+// stops the run with Error "interrupted" (in the loop stage, once the loops under way finish).
 AnalyzeResult analyze(const std::string& input, const AnalyzeOptions& options, const ProgressFn& progress = {});
 
 // Runs every stage after the level set on a given signed distance grid (negative inside).
