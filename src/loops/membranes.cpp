@@ -38,14 +38,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <exception>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <thread>
 #include <unordered_map>
 
+#include "common/caller_progress.h"
 #include "chokeloops/topology/complex.h"
 #include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/topology.h"
@@ -494,11 +493,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
   // A big map's stage runs for tens of seconds (the grey-matter map's 1,938 loops, a membrane protein's
   // thousands): its progress goes out as loops finish, and a caller that asks to stop (Ctrl-C in Python) is
   // heard between loops rather than at the stage's end.
-  const std::thread::id caller = std::this_thread::get_id();
-  std::atomic<std::size_t> finished{0};
-  std::atomic<bool> stop{false};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
+  detail::CallerProgress stage(progress, "loops", chokes.size());
   auto take = [&](std::atomic<std::size_t>& cursor, const std::vector<std::size_t>& list) -> std::ptrdiff_t {
     for (std::size_t k = cursor++; k < list.size(); k = cursor++)
       if (!taken[list[k]].exchange(1)) return std::ptrdiff_t(list[k]);
@@ -511,15 +506,13 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
      try {
        topology->prepare_homology();
      } catch (...) {
-       std::lock_guard<std::mutex> lock(failure_mutex);
-       if (!failure) failure = std::current_exception();
-       stop = true;
+       stage.fail(std::current_exception());
        return;
      }
      basis_ready = true;
    }
    for (;;) {
-    if (stop) break;
+    if (stage.stopped()) break;
     std::ptrdiff_t picked = basis_ready ? -1 : take(next_choke, chokes_only);
     if (picked < 0) picked = take(next, order);
     if (picked < 0) break;
@@ -534,28 +527,15 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     } catch (...) {
       // Anything else (memory running out) ends the stage: the other workers stop at their next loop, rather
       // than trace the rest of the list before the exception reaches the caller.
-      std::lock_guard<std::mutex> lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-      stop = true;
+      stage.fail(std::current_exception());
       break;
     }
     loops[i].trace_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    const std::size_t done = ++finished;
-    if (progress && std::this_thread::get_id() == caller) {
-      try {
-        if (!progress("loops", double(done) / double(chokes.size()))) stop = true;
-      } catch (...) {  // a hook that throws rather than answer false: its exception, as promptly
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        stop = true;
-      }
-    }
+    stage.item_done();
    }
   }, tbb::simple_partitioner());
   release_shortening_scratch();
-  if (failure) std::rethrow_exception(failure);
-  if (stop) throw Error("interrupted");
-  if (progress && !chokes.empty() && !progress("loops", 1.0)) throw Error("interrupted");
+  stage.finish();
   if (debug) {
     double sum = 0, mx = 0;
     for (const Loop& l : loops) sum += l.trace_ms, mx = std::max(mx, l.trace_ms);

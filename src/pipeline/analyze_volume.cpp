@@ -1,19 +1,18 @@
 #include "chokeloops/analyze_volume.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <set>
 #include <sstream>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
 #include "chokeloops/loops/membrane_voxels.h"
 #include "chokeloops/topology/complex.h"
+#include "common/caller_progress.h"
 
 namespace chokeloops {
 
@@ -127,22 +126,18 @@ LoopVolumes write_loop_volumes(const VolumeAnalysis& a, const VolumeImage& image
   // The loop stage flooded the first boxes of many chokes' sequences already (AnalyzeResult::membranes).
   // Progress and a request to stop go through the calling thread, as in the loop stage (the grey-matter
   // map's membranes take seconds).
-  const std::thread::id caller = std::this_thread::get_id();
-  std::atomic<std::size_t> finished{0};
-  std::atomic<bool> stop{false};
   if (progress && !progress("label volumes", 0)) throw Error("interrupted");
+  detail::CallerProgress stage(progress, "label volumes", r.loops.size());
   tbb::parallel_for(std::size_t(0), r.loops.size(), [&](std::size_t i) {
-    if (stop) return;
+    if (stage.stopped()) return;
     if (r.loops[i].found) {
       const MembraneProgress* from = i < r.membranes.size() ? &r.membranes[i] : nullptr;
       shores[i] = closing_membrane_voxels(r.grid, r.loops[i].choke, label_membrane_options(r.grid, r.loops[i].choke),
                                           MembraneShape::Sheet, true, &bounds, from);
     }
-    const std::size_t done = ++finished;
-    if (progress && std::this_thread::get_id() == caller && !progress("label volumes", double(done) / double(r.loops.size())))
-      stop = true;
+    stage.item_done();
   });
-  if (stop || (progress && !progress("label volumes", 1))) throw Error("interrupted");
+  stage.finish();
   const FreudenthalComplex cx(r.grid.dims);
   LoopVolumes out;
   for (std::size_t i = 0; i < shores.size(); ++i) {
