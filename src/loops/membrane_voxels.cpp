@@ -318,24 +318,34 @@ SheetAndPlane sheet_and_plane(const ScalarGrid& grid, const FreudenthalComplex& 
 
 namespace detail {
 
-MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, std::array<bool, 2> open,
-                                   int stop_at)
-    : grid_(grid), saddle_(FreudenthalComplex(grid.dims).coords(c.saddle)) {
-  full_ = std::max({grid.dims[0], grid.dims[1], grid.dims[2]});
-  cap_ = options.max_box_radius > 0 ? std::min(full_, options.max_box_radius) : full_;
-  p_.saddle = c.saddle;
-  for (auto& m : p_.membrane) m.note = "the membrane did not close near the choke";
-  p_.wanted = p_.open = open;
-  p_.stop_at = stop_at;
-  p_.radius = options.first_box_radius(c.depth, grid.voxel_size);
-  p_.seed_radius = options.seed_radius(c.depth, grid.voxel_size);
-  p_.done = !(open[0] || open[1]);
+namespace {
+
+// Where a sequence stands before its first box.
+MembraneProgress before_first_box(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, std::array<bool, 2> open,
+                                  int stop_at) {
+  MembraneProgress p;
+  p.saddle = c.saddle;
+  for (auto& m : p.membrane) m.note = "the membrane did not close near the choke";
+  p.wanted = p.open = open;
+  p.stop_at = stop_at;
+  p.radius = options.first_box_radius(c.depth, grid.voxel_size);
+  p.seed_radius = options.seed_radius(c.depth, grid.voxel_size);
+  p.done = !(open[0] || open[1]);
+  return p;
 }
 
-MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, const MembraneProgress& from)
-    : MembraneSequence(grid, c, options, from.wanted, from.stop_at) {
-  p_ = from;
-}
+}  // namespace
+
+MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, std::array<bool, 2> open,
+                                   int stop_at)
+    : MembraneSequence(grid, c, options, before_first_box(grid, c, options, open, stop_at)) {}
+
+MembraneSequence::MembraneSequence(const ScalarGrid& grid, const Choke& c, const LoopOptions& options, MembraneProgress from)
+    : grid_(grid),
+      saddle_(FreudenthalComplex(grid.dims).coords(c.saddle)),
+      full_(std::max({grid.dims[0], grid.dims[1], grid.dims[2]})),
+      cap_(options.max_box_radius > 0 ? std::min(full_, options.max_box_radius) : full_),
+      p_(std::move(from)) {}
 
 void MembraneSequence::fail(const std::string& why) {
   for (int k = 0; k < 2; ++k)

@@ -51,10 +51,10 @@ struct BandResult {
 
 // shorten_loop within a band of at most opt.max_rings rings. `earlier`: a call on the same loop with other
 // options; where this call's band is its band, steps 2 and 3 are its, and only what depends on this call's
-// rings and distances (whether the loop is at the band's edge) is computed again.
+// rings and distances (whether the loop is at the band's edge) is computed again. `record`: where this call's
+// band and whether it searched are kept, for a later call (its `result` is left to the caller).
 ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj, const std::vector<int>& loop,
-                              const ShortenOptions& opt, const BandResult* earlier = nullptr,
-                              std::vector<int>* band_faces = nullptr, bool* searched = nullptr) {
+                              const ShortenOptions& opt, const BandResult* earlier = nullptr, BandResult* record = nullptr) {
   ShortenResult R;
   if (loop.empty()) throw Error("loop is empty");
   for (size_t i = 0; i < loop.size(); ++i) {
@@ -124,7 +124,7 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
   R.rings = rings;
   if (!rings) return R;
   // The test above builds each band it tries; the last one built is the band of `rings` rings.
-  if (band_faces) band_faces->assign(sh.band.faces.begin(), sh.band.faces.end());
+  if (record) record->band_faces.assign(sh.band.faces.begin(), sh.band.faces.end());
   // Step 2's loop is at the band's edge when a vertex of it lies in the band's last ring, or within two of
   // its edges of max_move from the input loop.
   const auto at_band_edge = [&](const std::vector<int>& path, double path_length) {
@@ -205,7 +205,7 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
     s = sh.local_of(mid);
   }
   if (best.empty()) return R;
-  if (searched) *searched = true;
+  if (record) record->searched = true;
   R.edge_path = best;
   R.edge_path_length = best_len;
   R.at_band_edge = at_band_edge(best, best_len);
@@ -309,7 +309,7 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
   ShortenOptions narrow = opt;
   narrow.max_rings = opt.first_rings;
   BandResult narrow_result;
-  narrow_result.result = shorten_in_band(mesh, adj, loop, narrow, nullptr, &narrow_result.band_faces, &narrow_result.searched);
+  narrow_result.result = shorten_in_band(mesh, adj, loop, narrow, nullptr, &narrow_result);
   const ShortenResult& first = narrow_result.result;
   if (first.rings > 0 && !first.at_band_edge) return first;
   // The wide band starts from the input loop again, so that max_move keeps its meaning; of two loops

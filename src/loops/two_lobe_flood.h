@@ -129,7 +129,7 @@ class MembraneSequence {
   MembraneSequence(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, std::array<bool, 2> open,
                    int stop_at);
   // Goes on from `from`, recorded for this choke with the same options and shapes.
-  MembraneSequence(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, const MembraneProgress& from);
+  MembraneSequence(const ScalarGrid& grid, const Choke& choke, const LoopOptions& options, MembraneProgress from);
   bool done() const { return p_.done; }
   int radius() const { return p_.radius; }
   int seed_radius() const { return p_.seed_radius; }
@@ -137,7 +137,6 @@ class MembraneSequence {
   void take(FloodOutcome outcome, const FloodBox& box);
   // That flood threw: each open shape ends with `why` as its note.
   void fail(const std::string& why);
-  const MembraneProgress& progress() const { return p_; }
   MembraneProgress release() { return std::move(p_); }
 
  private:
