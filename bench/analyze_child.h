@@ -21,6 +21,9 @@
 
 namespace chokeloops::bench {
 
+// The time a loop's median should stay within (bench_loops' aim); ChildRun counts the loops that do.
+constexpr double kLoopAimMs = 5.0;
+
 struct ChildRun {
   std::map<std::string, double> timings_ms;  // per stage, as AnalyzeResult::timings_ms
   long long surface_vertices = 0;
@@ -30,6 +33,7 @@ struct ChildRun {
   // The same over the handle loops and over the tunnel loops (where a model's median sits), and the 90th
   // percentile over all loops (its long tail)
   double handle_median_ms = 0, tunnel_median_ms = 0, loop_p90_ms = 0;
+  int loops_within_aim = 0;  // loops whose own wall time is kLoopAimMs or less (how far the median is from it)
   double peak_mb = 0;
   std::string error;
 };
@@ -55,17 +59,18 @@ inline ChildRun analyze_in_child(const std::string& file, const AnalyzeOptions& 
       std::unique_ptr<tbb::global_control> limit;
       if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
       AnalyzeResult r = analyze(file, options);
-      int k = 0, found = 0;
+      int k = 0, found = 0, within_aim = 0;
       std::vector<double> per_loop, per_side[2];
       for (auto& l : r.loops) {
-        k += l.choke.kind == Kind::Choke, found += l.found, per_loop.push_back(l.trace_ms);
+        k += l.choke.kind == Kind::Choke, found += l.found, per_loop.push_back(l.trace_ms), within_aim += l.trace_ms <= kLoopAimMs;
         per_side[l.choke.side == Side::Handle ? 0 : 1].push_back(l.trace_ms);
       }
       struct rusage ru;
       getrusage(RUSAGE_SELF, &ru);
-      std::fprintf(out, "ok %lld %d %d %d %d %d %d %d %.1f %.3f %.3f %.3f %.3f\n", (long long)r.surface_stats.vertices,
+      std::fprintf(out, "ok %lld %d %d %d %d %d %d %d %.1f %.3f %.3f %.3f %.3f %d\n", (long long)r.surface_stats.vertices,
                    r.grid.dims[0], r.grid.dims[1], r.grid.dims[2], r.chokes.handle_generators, k, int(r.loops.size()), found,
-                   ru.ru_maxrss / 1024.0, median(per_loop), median(per_side[0]), median(per_side[1]), percentile(per_loop, 0.9));
+                   ru.ru_maxrss / 1024.0, median(per_loop), median(per_side[0]), median(per_side[1]), percentile(per_loop, 0.9),
+                   within_aim);
       for (auto& kv : r.timings_ms) std::fprintf(out, "%s\t%.3f\n", kv.first.c_str(), kv.second);
     } catch (const std::exception& e) {
       std::fprintf(out, "error %s\n", e.what());
@@ -78,9 +83,9 @@ inline ChildRun analyze_in_child(const std::string& file, const AnalyzeOptions& 
   char line[4096];
   if (std::fgets(line, sizeof line, in)) {
     if (std::strncmp(line, "ok ", 3) == 0) {
-      std::sscanf(line + 3, "%lld %d %d %d %d %d %d %d %lf %lf %lf %lf %lf", &res.surface_vertices, &res.dims[0], &res.dims[1],
+      std::sscanf(line + 3, "%lld %d %d %d %d %d %d %d %lf %lf %lf %lf %lf %d", &res.surface_vertices, &res.dims[0], &res.dims[1],
                   &res.dims[2], &res.g, &res.k, &res.loops, &res.loops_found, &res.peak_mb, &res.loop_median_ms,
-                  &res.handle_median_ms, &res.tunnel_median_ms, &res.loop_p90_ms);
+                  &res.handle_median_ms, &res.tunnel_median_ms, &res.loop_p90_ms, &res.loops_within_aim);
       while (std::fgets(line, sizeof line, in)) {
         char* tab = std::strchr(line, '\t');
         if (!tab) continue;
