@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 
 #include "chokeloops/loops/channels.h"
 #include "chokeloops/loops/linking.h"
@@ -115,6 +116,53 @@ bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& c
   return odd_groups().empty();
 }
 
+bool section_bounds_on_its_side(const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology& topology,
+                                const Polyline3& section, const std::vector<const SideCycle*>& other_side, const SideCycle* own,
+                                std::vector<int>& path) {
+  // Cheapest test first: the own cycle (one), then the other side's, then the surface's homology.
+  if (own) {
+    const auto lk = linking_number(section, own->points);
+    if (!lk || *lk % 2 == 0) return false;
+  }
+  if (linked_cycle(section, other_side) >= 0) return false;
+  try {
+    path = snap_polyline_to_edge_path(surface, adjacency, section);
+  } catch (const Error&) {
+    return false;
+  }
+  return path.size() >= 3 && !topology.null_homologous(path);
+}
+
+bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                           SurfaceTopology& topology, const SurfaceSections& sections, const Choke& c,
+                           const std::vector<const SideCycle*>& other_side, const SideCycle& own, Polyline3& out,
+                           std::vector<int>& out_path) {
+  const Polyline3& P = own.points;
+  const std::size_t n = P.size();
+  if (n < 5) return false;
+  std::size_t nearest = 0;
+  double nearest_d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d2 = std::pow(P[i][0] - c.point[0], 2) + std::pow(P[i][1] - c.point[1], 2) + std::pow(P[i][2] - c.point[2], 2);
+    if (d2 < nearest_d2) nearest_d2 = d2, nearest = i;
+  }
+  // The cycle is a path of grid vertices: its direction over four of them, not one step's axis.
+  const auto& a = P[(nearest + n - 2) % n];
+  const auto& b = P[(nearest + 2) % n];
+  const std::array<double, 3> tangent{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  if (tangent == std::array<double, 3>{0, 0, 0}) return false;
+  // Any radius: the innermost curve round the choke is followed from the choke outward (SurfaceSections).
+  double reach = 0;
+  for (int k = 0; k < 3; ++k) reach += std::pow(grid.h(k) * (grid.dims[k] - 1), 2);
+  Polyline3 section = sections.around(c.point, tangent, std::sqrt(reach));
+  std::vector<int> path;
+  if (section.size() < 3 || !section_bounds_on_its_side(surface, adjacency, topology, section, other_side, &own, path))
+    return false;
+  out = std::move(section);
+  out_path = std::move(path);
+  return true;
+}
+
 bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                             SurfaceTopology& topology, const SurfaceSections& sections_of, const Choke& c,
                             const std::vector<const SideCycle*>& other_side, const SideCycle* own, Polyline3& out,
@@ -178,19 +226,8 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
       if (sections[i].size() >= 3) order.push_back({closed_length(sections[i]), i}), done[index[i]] = 1;
     std::stable_sort(order.begin(), order.end());
     for (const auto& [length, i] : order) {
-      // Cheapest test first: the own cycle (one), then the other side's, then the surface's homology.
-      if (own) {
-        const auto lk = linking_number(sections[i], own->points);
-        if (!lk || *lk % 2 == 0) continue;
-      }
-      if (linked_cycle(sections[i], other_side) >= 0) continue;
       std::vector<int> path;
-      try {
-        path = snap_polyline_to_edge_path(surface, adjacency, sections[i]);
-      } catch (const Error&) {
-        continue;
-      }
-      if (path.size() < 3 || topology.null_homologous(path)) continue;
+      if (!section_bounds_on_its_side(surface, adjacency, topology, sections[i], other_side, own, path)) continue;
       if (debug)
         std::fprintf(stderr, "membranes: %s generator depth %g: plane section %g long (plane %zu of %zu, radius %g)\n", to_string(c.side),
                      c.depth, length, index[i], planes.size(), radius);

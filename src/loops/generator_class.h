@@ -54,6 +54,21 @@ bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& c
 // with more found generator loops is left unchecked and false is returned for it.
 bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& cycles, std::size_t max_loops = 1000);
 
+// Whether a plane section is a loop of a generator of its side: it links `own` (when given) an odd number of
+// times and none of `other_side`, and is essential on the surface; `path` is then the section snapped to edges.
+bool section_bounds_on_its_side(const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology& topology,
+                                const Polyline3& section, const std::vector<const SideCycle*>& other_side, const SideCycle* own,
+                                std::vector<int>& path);
+
+// The start of generator `c`'s loop without a membrane: the section by the plane through the choke point square
+// to the choke's own cycle (where the cycle passes nearest the choke), the innermost curve round the choke at
+// any radius, when it passes section_bounds_on_its_side. Across a handle resolved by the grid that plane cuts
+// it as its membrane does (the loop tracer asks it only for chokes two voxels deep or more).
+bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
+                           SurfaceTopology& topology, const SurfaceSections& sections, const Choke& c,
+                           const std::vector<const SideCycle*>& other_side, const SideCycle& own, Polyline3& out,
+                           std::vector<int>& out_path);
+
 // The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
 // point in 48 directions, and by planes square to the choke's own cycle at about 40 points along it,
 // that wind around their point; the shortest that is essential on the surface, links none of

@@ -16,6 +16,11 @@
 // and the flood box grows until the interface closes on the surface near the choke (a generator's box only
 // on the sides where a curve through the choke runs out of it: a membrane across a thick block is a thin sheet).
 //
+// Generators two voxels deep or more first try the plane through the choke square to their cycle
+// (LoopOptions::plane_start): across a handle the grid resolves it cuts where the membrane does, for a fifth of
+// the cost; its section is kept only when it bounds on its side and shortens to an essential loop (on thinner
+// ones, pinholes of a thin sheet, the plane cuts the sheet instead; README, "Generators from the plane square
+// to their cycle").
 // Generators: the zones' interface can have several curves on the surface. A generator's loop must be
 // non-contractible there, so its curves are asked in order of distance from the choke and the nearest one
 // that is not null in Z/2 homology (SurfaceTopology::null_homologous, one face flood) is taken. On a flat core (the
@@ -70,6 +75,8 @@ class LoopTracer {
         debug_far_curves_(std::getenv("CHOKELOOPS_DEBUG_FAR_CURVES") != nullptr) {}
 
   static constexpr int kThinCoreBox = 48;
+  // A generator this many voxels deep or more starts from its plane section (LoopOptions::plane_start).
+  static constexpr double kPlaneStartDepth = 2;
   static constexpr double kSectionsFirstVoxels = 1 << 20;
   static constexpr const char* kSectionNote =
       "the membrane's interface gave no curve that bounds on its side (a flat core, e.g. a thin wall): the loop is the "
@@ -133,6 +140,24 @@ class LoopTracer {
       return c.kind == Kind::Generator && !sections_tried && check.other_side &&
              box_voxels(box, saddle_at, bounds) >= kSectionsFirstVoxels;
     };
+    if (options.plane_start && c.kind == Kind::Generator && check.other_side && own_cycle &&
+        c.depth >= kPlaneStartDepth * h) {
+      Polyline3 section;
+      std::vector<int> section_path;
+      const bool taken = detail::generator_plane_start(g_, S_, A_, *T_, sections(), c, *check.other_side, *own_cycle, section,
+                                                       section_path);
+      if (debug_) std::fprintf(stderr, "membranes: %s generator depth %g: plane start %s\n", to_string(c.side), c.depth, taken ? "taken" : "refused");
+      if (taken) {
+        Loop from_section = loop;
+        from_section.found = true;
+        try {
+          if (finish_loop(from_section, options, section, section_path, true)) return from_section;
+        } catch (const Error&) {
+          // its membrane, as for any other generator
+        }
+        if (debug_) std::fprintf(stderr, "membranes: %s generator depth %g: plane start not shortened\n", to_string(c.side), c.depth);
+      }
+    }
     for (int attempt = 0; attempt < 48; ++attempt) {
       // Where an earlier box did not close the membrane, the sections are tried before this one is flooded
       // rather than after: they depend on the choke alone, so the loop changes only where this box's flood
@@ -216,6 +241,18 @@ class LoopTracer {
                       : "the membrane did not close on the surface near the choke";
       return loop;
     }
+    finish_loop(loop, options, raw, raw_path, false);
+    return loop;
+  }
+
+  // Shortens and describes a found loop from its curve `raw` (and `raw_path`, its edge path when known).
+  // `shortened_or_nothing`: where the curve cannot be shortened (no annulus band round it) or its shortest
+  // loop slips off a generator's handle (null-homologous), false is returned and the loop is left half made,
+  // instead of reporting the curve unshortened.
+  bool finish_loop(Loop& loop, const LoopOptions& options, const Polyline3& raw, const std::vector<int>& raw_path,
+                   bool shortened_or_nothing) const {
+    const Choke& c = loop.choke;
+    const double h = g_.voxel_size;
     auto t_shorten = std::chrono::steady_clock::now();
     loop.raw_length = closed_length(raw);
     loop.points = raw;
@@ -261,11 +298,13 @@ class LoopTracer {
       // loop in it can slip off that handle (on the grey-matter map a 3 mm plane section came out contractible):
       // the curve that was checked is then reported unshortened.
       if (c.kind == Kind::Generator && T_ && best.rings > 0 && !raw_path.empty() && T_->null_homologous(best.edge_path)) {
+        if (shortened_or_nothing) return false;
         loop.edge_path = raw_path;
         loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: its shortest loop in the band is null-homologous";
         describe_loop(loop);
-        return loop;
+        return true;
       }
+      if (best.rings == 0 && shortened_or_nothing) return false;
       if (best.rings == 0) loop.note += std::string(loop.note.empty() ? "" : "; ") + "not shortened: no annulus band around the loop";
       // Unshortened (best.length is then its edge path's), the interface curve itself may be shorter than
       // its edge path (it cuts across faces).
@@ -278,7 +317,7 @@ class LoopTracer {
     if (debug_)
       std::fprintf(stderr, "membranes: %s %s depth %g: shortened/slid in %.0f ms\n", to_string(c.side), to_string(c.kind), c.depth,
                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_shorten).count());
-    return loop;
+    return true;
   }
 
   // The grid vertices the box around `saddle` holds within the side's bounds (what its flood reads).

@@ -22,6 +22,11 @@ struct LoopOptions {
   double box_factor = 1.5;   // local box half-size = box_factor * depth + box_margin voxels (grown on demand)
   int box_margin = 3;
   int max_box_radius = 0;    // voxels; 0: boxes grow up to the whole grid
+  // A generator two voxels deep or more first tries the section by the plane through its choke square to its
+  // cycle, kept when it bounds on its side and is shortened to a loop that stays essential; else, and for thinner ones,
+  // its membrane. (Across a handle the grid resolves, that plane cuts it where the membrane does, for a fifth
+  // of the membrane's cost; a plane through a pinhole of a thin sheet cuts the sheet instead.)
+  bool plane_start = true;
 
   // The first box's half-size around a choke of this depth, and the radius its seed pieces are looked for
   // within, in voxels of size `voxel`: what the loop stage, the label volumes and the filter start from.
