@@ -59,7 +59,7 @@ struct Settings {
 };
 
 // Keyword options, named as the CLI's (dmax, min_persistence, side, resolution, voxel_size, margin,
-// max_memory, threads, shorten, slide, check, fill_holes, iso, grid, origin). Unknown names: TypeError.
+// max_memory, threads, shorten, slide, plane_start, check, fill_holes, iso, grid, origin). Unknown names: TypeError.
 Settings settings(const py::dict& kw) {
   Settings s;
   AnalyzeOptions& o = s.analyze;
@@ -106,6 +106,7 @@ Settings settings(const py::dict& kw) {
       s.threads = int(t);
     } else if (key == "shorten") o.loops.shorten = v.cast<bool>();
     else if (key == "slide") o.loops.slide = v.cast<bool>();
+    else if (key == "plane_start") o.loops.plane_start = v.cast<bool>();
     else if (key == "check") o.check_generators = v.cast<bool>();
     else if (key == "fill_holes") o.levelset.fill_holes = v.cast<bool>();
     else if (key == "iso") o.levelset.iso = v.cast<double>();

@@ -59,6 +59,8 @@ optionally .gz; lengths in Å, default --voxel-size 0.25), or a medical volume (
   --no-view                 do not write view.html
   --no-shorten              keep the raw membrane loops (no geodesic shortening)
   --no-slide                shorten only; do not slide loops along tubes to the narrowest section
+  --no-plane-start          every generator's loop from its membrane, none from the plane section
+                            square to its cycle (the same loops within ~0.1%, slower)
   --no-check                skip verifying that generator loops are non-contractible (CGAL; costs
                             seconds on large surfaces of positive genus)
   --no-input-loops          meshes: do not carry the loops onto the input mesh (input_loops.json,
@@ -249,6 +251,7 @@ int run(std::vector<std::string> args) {
     else if (in.is("--no-view")) view = false;
     else if (in.is("--no-shorten")) options.loops.shorten = false;
     else if (in.is("--no-slide")) options.loops.slide = false;
+    else if (in.is("--no-plane-start")) options.loops.plane_start = false;
     else if (in.is("--no-check")) options.check_generators = false;
     else if (in.is("--no-input-loops")) options.input_loops = false;
     else if (in.is("-q", "--quiet")) quiet = true;

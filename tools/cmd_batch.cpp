@@ -24,7 +24,7 @@ analysed again. A failing input never stops the others.
   --threads N               threads per input (default: all cores / jobs)
   --force                   analyse every input again (no resume)
   --resolution N|auto, --voxel-size H, --margin M, --dmax X, --min-persistence Y, --side handle|tunnel|both,
-  --max-memory BYTES, --no-view, --no-shorten, --no-slide, --no-check
+  --max-memory BYTES, --no-view, --no-shorten, --no-slide, --no-plane-start, --no-check
                             as for chokeloops analyze (--max-memory is per input)
   --quiet                   no line per finished input on stderr
 Exit codes: 0 every input ok, 1 some input failed (see summary.csv), 2 bad arguments.
@@ -69,6 +69,7 @@ int run(std::vector<std::string> args) {
     else if (in.is("--no-view")) options.view = false;
     else if (in.is("--no-shorten")) ao.loops.shorten = false;
     else if (in.is("--no-slide")) ao.loops.slide = false;
+    else if (in.is("--no-plane-start")) ao.loops.plane_start = false;
     else if (in.is("--no-check")) ao.check_generators = false;
     else if (in.is("-q", "--quiet")) quiet = true;
     else {

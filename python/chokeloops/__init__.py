@@ -19,7 +19,7 @@
 Grid arrays are indexed a[i, j, k] = value at origin + voxel_size * (i, j, k); negative inside.
 Options are the CLI's, as keywords: resolution (int or "auto"), voxel_size, margin, dmax, min_persistence
 (a percentage string like "50%" or a length), side ("handle"/"tunnel"/"both"), max_memory (bytes or "8G"),
-threads, shorten, slide, check, fill_holes, iso, grid. Errors raise InputError (a ValueError: bad input,
+threads, shorten, slide, plane_start, check, fill_holes, iso, grid. Errors raise InputError (a ValueError: bad input,
 CLI exit code 2) or ResourceError (a MemoryError: out of resources, exit code 3) with the CLI's message;
 InternalError (a RuntimeError, exit code 4) is a bug in chokeloops; all derive from chokeloops.Error.
 The engine runs with the GIL released.

@@ -157,7 +157,7 @@ std::string options_key(const AnalyzeOptions& o) {
     << " grid=" << o.levelset.grid_name << " fill_holes=" << o.levelset.fill_holes
     << " dmax=" << o.chokes.d_max.text() << " min_persistence=" << o.chokes.min_persistence.text()
     << " handles=" << o.chokes.handles << " tunnels=" << o.chokes.tunnels << " shorten=" << o.loops.shorten
-    << " slide=" << o.loops.slide << " check=" << o.check_generators;
+    << " slide=" << o.loops.slide << " plane_start=" << o.loops.plane_start << " check=" << o.check_generators;
   return s.str();
 }
 

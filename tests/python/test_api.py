@@ -31,6 +31,20 @@ def test_torus_sdf_array_gives_one_handle_and_one_tunnel_generator():
     assert r.voxel_size == pytest.approx(h) and tuple(r.origin) == origin
 
 
+def test_plane_start_keyword_gives_the_membranes_loops():
+    # plane_start=False takes every generator's loop from its membrane: on the torus the same two loops
+    # within a small fraction of their length (the loop stage's own test compares them on more shapes).
+    sdf, h, origin = torus_sdf(64)
+    a = chokeloops.analyze(sdf, voxel_size=h, origin=origin)
+    b = chokeloops.analyze(sdf, voxel_size=h, origin=origin, plane_start=False)
+    assert len(a.loops) == len(b.loops) == 2
+    for x, y in zip(a.loops, b.loops):
+        assert x["side"] == y["side"] and x["found"] and y["found"]
+        assert abs(x["length"] / y["length"] - 1) < 2e-3
+    # ... but not the same points: the keyword reached the loop stage
+    assert any(not np.array_equal(x["points"], y["points"]) for x, y in zip(a.loops, b.loops))
+
+
 def test_result_arrays_are_views_not_copies():
     sdf, h, origin = torus_sdf(40)
     r = chokeloops.analyze(sdf, voxel_size=h, origin=origin)
