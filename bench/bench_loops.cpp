@@ -6,7 +6,8 @@
 // The analytic models are sampled and their marching surface written as a PLY mesh first, so that every
 // model goes through `analyze` as a user's mesh does. Each run is a child process (analyze_child.h).
 //
-//   bench_loops [--runs 3] [--threads N] [--only NAME] [--data data]
+//   bench_loops [--runs 3] [--threads N] [--only NAME] [--data data] [--no-plane-start]
+// --no-plane-start: every generator's loop from its membrane (LoopOptions::plane_start off), to compare.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -51,8 +52,9 @@ void write_model_mesh(const Sdf& sdf, int n, const std::string& path) {
   }
 }
 
-void run_model(const Model& m, int runs, int threads) {
+void run_model(const Model& m, int runs, int threads, bool plane_start) {
   AnalyzeOptions o;
+  o.loops.plane_start = plane_start;
   o.levelset.resolution = m.resolution;
   if (!m.d_max.empty()) o.chokes.d_max = Threshold::parse(m.d_max);
   if (!m.min_persistence.empty()) o.chokes.min_persistence = Threshold::parse(m.min_persistence);
@@ -90,6 +92,7 @@ void run_model(const Model& m, int runs, int threads) {
 int main(int argc, char** argv) {
   chokeloops::restart_with_huge_pages(argv);
   int runs = 3, threads = 0;
+  bool plane_start = true;
   std::string data = std::string(CHOKELOOPS_SOURCE_DIR) + "/data", only;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -97,7 +100,8 @@ int main(int argc, char** argv) {
     else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (a == "--data" && i + 1 < argc) data = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
-    else { std::fprintf(stderr, "usage: bench_loops [--runs N] [--threads N] [--only NAME] [--data DIR]\n"); return 2; }
+    else if (a == "--no-plane-start") plane_start = false;
+    else { std::fprintf(stderr, "usage: bench_loops [--runs N] [--threads N] [--only NAME] [--data DIR] [--no-plane-start]\n"); return 2; }
   }
   const auto tmp = std::filesystem::temp_directory_path();
   const std::string block = (tmp / "chokeloops_pierced_block.ply").string();
@@ -110,6 +114,7 @@ int main(int argc, char** argv) {
       {"fertility", data + "/meshes/fertility_vmas.off", 256, "50%", "10%"},
       {"neptune", data + "/meshes/neptune_vmas.off", 472, "50%", "10%"},
   };
+  if (!plane_start) std::printf("every generator's loop from its membrane (--no-plane-start)\n");
   std::printf("median of %d runs, %s threads; times in ms; ratio = loop stage / level-set stage of the same run;\n"
               "ms/loop = loop stage / loops traced; loop med = median over the loops of each one's own wall time (loops\n"
               "run in parallel), also over the handle loops (H med) and the tunnel loops (T med), and its 90th percentile\n"
@@ -121,7 +126,7 @@ int main(int argc, char** argv) {
   for (const Model& m : models) {
     if (!only.empty() && m.name != only) continue;
     if (!std::filesystem::exists(m.file)) { std::printf("| %-13s | missing %s |\n", m.name.c_str(), m.file.c_str()); continue; }
-    run_model(m, runs, threads);
+    run_model(m, runs, threads, plane_start);
   }
   if (!aim_lines.empty()) std::printf("\naim: loop stage <= %.1fx the level set, median loop <= %.0f ms (medians of the runs)\n", kAimRatio, kAimMedianMs);
   // The median is the loop at place loops / 2 (from 0) in time order: loops / 2 + 1 of them within the aim meet it.
