@@ -23,9 +23,9 @@ struct LoopOptions {
   int box_margin = 3;
   int max_box_radius = 0;    // voxels; 0: boxes grow up to the whole grid
   // A generator two voxels deep or more first tries the section by the plane through its choke square to its
-  // cycle, kept when it bounds on its side and is shortened to a loop that stays essential; else, and for thinner ones,
-  // its membrane. (Across a handle the grid resolves, that plane cuts it where the membrane does, for a fifth
-  // of the membrane's cost; a plane through a pinhole of a thin sheet cuts the sheet instead.)
+  // cycle, kept when it bounds on its side and shortens to a loop that stays essential; else, and for thinner
+  // ones, its membrane. (Across a handle the grid resolves, that plane cuts it where the membrane does, for a
+  // fifth of the membrane's cost; a plane through a pinhole of a thin sheet cuts the sheet instead.)
   bool plane_start = true;
 
   // The first box's half-size around a choke of this depth, and the radius its seed pieces are looked for
