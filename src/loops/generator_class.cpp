@@ -34,6 +34,22 @@ bool apart(const Box& b, const SideCycle& z) {
     if (z.hi[a] < b.lo[a] || z.lo[a] > b.hi[a]) return true;
   return false;
 }
+// The direction of cycle P at its point i: over four of its points, not one step's axis (the cycle is a path
+// of grid vertices).
+std::array<double, 3> cycle_direction(const Polyline3& P, std::size_t i) {
+  const std::size_t n = P.size();
+  const auto& a = P[(i + n - 2) % n];
+  const auto& b = P[(i + 2) % n];
+  return {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+}
+
+// The grid's diagonal: a section radius that holds every face.
+double grid_diagonal(const ScalarGrid& grid) {
+  double reach = 0;
+  for (int a = 0; a < 3; ++a) reach += std::pow(grid.origin[a] + grid.h(a) * (grid.dims[a] - 1) - grid.origin[a], 2);
+  return std::sqrt(reach);
+}
+
 }  // namespace
 
 void make_generator_cycles(const ScalarGrid& grid, const std::vector<Choke>& chokes, GeneratorCycles& out) {
@@ -146,15 +162,10 @@ bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, c
     const double d2 = std::pow(P[i][0] - c.point[0], 2) + std::pow(P[i][1] - c.point[1], 2) + std::pow(P[i][2] - c.point[2], 2);
     if (d2 < nearest_d2) nearest_d2 = d2, nearest = i;
   }
-  // The cycle is a path of grid vertices: its direction over four of them, not one step's axis.
-  const auto& a = P[(nearest + n - 2) % n];
-  const auto& b = P[(nearest + 2) % n];
-  const std::array<double, 3> tangent{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const std::array<double, 3> tangent = cycle_direction(P, nearest);
   if (tangent == std::array<double, 3>{0, 0, 0}) return false;
   // Any radius: the innermost curve round the choke is followed from the choke outward (SurfaceSections).
-  double reach = 0;
-  for (int k = 0; k < 3; ++k) reach += std::pow(grid.h(k) * (grid.dims[k] - 1), 2);
-  Polyline3 section = sections.around(c.point, tangent, std::sqrt(reach));
+  Polyline3 section = sections.around(c.point, tangent, grid_diagonal(grid));
   std::vector<int> path;
   if (section.size() < 3 || !section_bounds_on_its_side(surface, adjacency, topology, section, other_side, &own, path))
     return false;
@@ -185,22 +196,19 @@ bool generator_section_loop(const ScalarGrid& grid, const SurfaceMesh& surface, 
       bool in_grid = true;
       for (int a = 0; a < 3; ++a) in_grid &= P[i][a] >= lo[a] && P[i][a] <= hi[a];
       if (!in_grid) continue;  // the part of a tunnel's cycle that goes round the outside of the grid
-      const auto& p0 = P[(i + n - 2) % n];
-      const auto& p1 = P[(i + 2) % n];
-      Eigen::Vector3d t(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+      const auto d = cycle_direction(P, i);
+      Eigen::Vector3d t(d[0], d[1], d[2]);
       if (t.norm() == 0) continue;
       t.normalize();
       planes.push_back({P[i], {t[0], t[1], t[2]}});
     }
   }
-  double reach = 0;
-  for (int a = 0; a < 3; ++a) reach += std::pow(hi[a] - lo[a], 2);
   const double h = grid.voxel_size;
   // Radius by radius: a curve that closes only beyond radius r is longer than 2r, so a passing curve no
   // longer than that ends the search (wide sections over the whole surface are what cost here).
   std::vector<char> done(planes.size(), 0);
   double best_length = 1e300;
-  const std::array<double, 3> radii{6 * c.depth + 6 * h, 24 * c.depth + 12 * h, std::sqrt(reach)};
+  const std::array<double, 3> radii{6 * c.depth + 6 * h, 24 * c.depth + 12 * h, grid_diagonal(grid)};
   for (std::size_t level = 0; level < radii.size(); ++level) {
     const double radius = radii[level];
     // The planes whose sections cannot link the own cycle once are left out from the second radius on: the
