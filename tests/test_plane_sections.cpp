@@ -1,5 +1,6 @@
 // Plane sections found from a ray (SurfaceSections with an adjacency) against the whole plane's cut
-// (section_of over every face the plane crosses): the same curve, point for point, on a block pierced by
+// (section_of over every face the plane crosses): the same curve, point for point (and the ray's faces those
+// of its segments), on a block pierced by
 // holes and on a tangle cube, for planes of every direction through points inside and outside the solid,
 // with radii from a few voxels to the whole surface. And the curves are what a plane section must be: on the
 // torus, the section square to the tube around a point on its core circle is a circle of the tube's radius.
@@ -27,6 +28,33 @@ struct Counts {
   int planes = 0, sections = 0;
 };
 
+// The faces a section lists are those of its segments in turn: face k holds points k and k + 1, which lie on
+// the edges it shares with the faces before and after it.
+void expect_faces_of_curve(const SurfaceMesh& surface, const MeshAdjacency& adjacency, const Polyline3& curve,
+                           const std::vector<int>& faces) {
+  ASSERT_EQ(faces.size(), curve.size());
+  const std::size_t n = faces.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const int f = faces[k], g = faces[(k + 1) % n];
+    int shared = -1;
+    for (int e = 0; e < 3; ++e) {
+      const int t = adjacency.twin[std::size_t(3 * g + e)];
+      if (t >= 0 && MeshAdjacency::face(t) == f) shared = 3 * g + e;
+    }
+    ASSERT_GE(shared, 0) << "faces " << k << " and " << k + 1 << " share no edge";
+    const auto& a = surface.vertices[std::size_t(surface.faces[std::size_t(g)][std::size_t(shared % 3)])];
+    const auto& b = surface.vertices[std::size_t(surface.faces[std::size_t(g)][std::size_t((shared % 3 + 1) % 3)])];
+    const auto& q = curve[(k + 1) % n];
+    double ab[3], aq[3], len2 = 0, along = 0;
+    for (int d = 0; d < 3; ++d) ab[d] = b[std::size_t(d)] - a[std::size_t(d)], aq[d] = q[std::size_t(d)] - a[std::size_t(d)];
+    for (int d = 0; d < 3; ++d) len2 += ab[d] * ab[d], along += ab[d] * aq[d];
+    const double t = std::clamp(along / len2, 0.0, 1.0);
+    double off = 0;
+    for (int d = 0; d < 3; ++d) off += (aq[d] - t * ab[d]) * (aq[d] - t * ab[d]);
+    EXPECT_LT(std::sqrt(off), 1e-12) << "point " << (k + 1) % n << " is not on the edge its faces share";
+  }
+}
+
 Counts compare_ray_with_plane(const Sdf& sdf, int n, std::uint64_t seed) {
   const ScalarGrid grid = sample_field({n, n, n}, sdf);
   const SurfaceMesh surface = extract_zero_surface(grid);
@@ -40,8 +68,10 @@ Counts compare_ray_with_plane(const Sdf& sdf, int n, std::uint64_t seed) {
     std::array<double, 3> normal{unit(rng), unit(rng), unit(rng)};
     if (k % 10 == 0) normal = {0, 0, 1};  // axis-aligned planes through grid vertices: the ties
     for (double radius : {0.03, 0.12, 2.0}) {
-      const Polyline3 by_ray = sections.around(p, normal, radius, true);
+      std::vector<int> faces;
+      const Polyline3 by_ray = sections.around(p, normal, radius, true, &faces);
       const Polyline3 by_plane = sections.around(p, normal, radius, false);
+      if (!faces.empty()) expect_faces_of_curve(surface, adjacency, by_ray, faces);
       ++counts.planes;
       counts.sections += !by_plane.empty();
       EXPECT_EQ(by_ray, by_plane) << "plane " << k << " radius " << radius << ": " << by_ray.size() << " vs "

@@ -330,8 +330,10 @@ class RaySection {
     e2_ = n_.cross(e1_);
   }
 
-  bool run(Polyline3& out) {
+  // `faces`, when given, gets the face of each segment out[k] -> out[k + 1] (the last closing the curve).
+  bool run(Polyline3& out, std::vector<int>* faces = nullptr) {
     out.clear();
+    if (faces) faces->clear();
     if (q_.empty) return true;
     // A face the curve crosses the ray in holds a point of the ray within a face's size of its first vertex,
     // and that vertex is within max_radius of p.
@@ -374,10 +376,13 @@ class RaySection {
       if (!follow(f, seen, is_closed, walk, first)) return false;
       if (!is_closed) continue;
       std::vector<V3> pts;
-      points_from(walk, first, pts);
+      points_from(walk, first, pts, faces);
       if (pts.size() < 3) continue;
       double area;
-      if (!winds_around(pts, p_, e1_, e2_, area)) continue;
+      if (!winds_around(pts, p_, e1_, e2_, area)) {
+        if (faces) faces->clear();
+        continue;
+      }
       for (const V3& q : pts) out.push_back(arr(q));
       return true;
     }
@@ -470,16 +475,24 @@ class RaySection {
     return true;
   }
   // The closed curve's points as section_of lists them: from its first face's first cut edge, leaving by its
-  // second (the walk's way round, or against it). Each point is that of the edge between two faces in turn.
-  void points_from(const std::vector<Step>& walk, std::size_t first, std::vector<V3>& pts) const {
+  // second (the walk's way round, or against it). Each point is that of the edge between two faces in turn;
+  // `faces` (when given) the face between each point and the next.
+  void points_from(const std::vector<Step>& walk, std::size_t first, std::vector<V3>& pts, std::vector<int>* faces) const {
     const std::size_t m = walk.size();
     auto exit_point = [&](std::size_t i) { return point_on(walk[i].face, walk[i].exit); };
     const Step& start = walk[first];
     pts.reserve(m);
+    if (faces) faces->clear(), faces->reserve(m);
     if (start.cut.edge[1] == start.exit) {
-      for (std::size_t k = 0; k < m; ++k) pts.push_back(exit_point((first + m - 1 + k) % m));
+      for (std::size_t k = 0; k < m; ++k) {
+        pts.push_back(exit_point((first + m - 1 + k) % m));
+        if (faces) faces->push_back(walk[(first + k) % m].face);
+      }
     } else {
-      for (std::size_t k = 0; k < m; ++k) pts.push_back(exit_point((first + m - k) % m));
+      for (std::size_t k = 0; k < m; ++k) {
+        pts.push_back(exit_point((first + m - k) % m));
+        if (faces) faces->push_back(walk[(first + m - k) % m].face);
+      }
     }
   }
 
@@ -525,13 +538,15 @@ SurfaceSections::SurfaceSections(const SurfaceMesh& surface, const MeshAdjacency
 SurfaceSections::~SurfaceSections() = default;
 
 Polyline3 SurfaceSections::around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius,
-                                  bool by_ray) const {
+                                  bool by_ray, std::vector<int>* faces) const {
+  if (faces) faces->clear();
   const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (!(len > 0) || surface_.faces.empty()) return {};
   const std::array<double, 3> unit{n[0] / len, n[1] / len, n[2] / len};
   if (adjacency_ && by_ray) {
     Polyline3 out;
-    if (detail::RaySection(surface_, *adjacency_, cells_->cells, p, unit, max_radius).run(out)) return out;
+    if (detail::RaySection(surface_, *adjacency_, cells_->cells, p, unit, max_radius).run(out, faces)) return out;
+    if (faces) faces->clear();
   }
   return detail::section_of(surface_, cells_->cells.near_plane(surface_, p, unit, max_radius), p, unit, max_radius);
 }

@@ -3,6 +3,7 @@
 // p and encloses the least area. HOLE's and the generator loops' cross-sections (channels.h, membranes.h).
 #include <array>
 #include <memory>
+#include <vector>
 
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
@@ -21,7 +22,10 @@ class SurfaceSections {
  public:
   explicit SurfaceSections(const SurfaceMesh& surface, const MeshAdjacency* adjacency = nullptr);
   ~SurfaceSections();
-  Polyline3 around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius, bool by_ray = true) const;
+  // `faces`, when given, gets the face of each segment point k -> k + 1 (the last closing the curve) where the
+  // curve was followed through the adjacency, and stays empty otherwise.
+  Polyline3 around(const std::array<double, 3>& p, const std::array<double, 3>& n, double max_radius, bool by_ray = true,
+                   std::vector<int>* faces = nullptr) const;
   // Whether the segment a-b meets no face of the surface (false when in doubt: a touch within rounding).
   bool segment_clear(const std::array<double, 3>& a, const std::array<double, 3>& b) const;
 
