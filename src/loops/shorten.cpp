@@ -237,47 +237,8 @@ ShortenResult shorten_in_band(const SurfaceMesh& mesh, const MeshAdjacency& adj,
       std::fprintf(stderr, "plane section: none winds like the loop\n");
     }
   }
-  int flat_rounds = 0, rounds = 0;
-  // On a surface of revolution (a hole's wall, a tube of even radius) the loop drifts across a family of
-  // nearly equal sections, each round of swaps gaining a millionth of its length: hundreds of rounds for
-  // a loop already within 1e-4 of its final length. Stop when the last rounds together gain too little.
-  constexpr int kProgressWindow = 8;
-  constexpr double kMinProgress = 1e-5;  // of the length, over the window
-  std::vector<double> round_length{L};
-  // A round's trial strip lives in buffers kept across rounds (an accepted round swaps them with the strip's).
-  std::vector<int> S2;
-  std::vector<double> s2;
-  std::vector<Shortener::Apex> ap2;
-  std::vector<std::array<int, 2>> dirty;
-  for (int it = 0; it < 400 && R.swaps < opt.max_swaps; ++it) {
-    S2.assign(S.begin(), S.end());
-    s2.assign(sp.begin(), sp.end());
-    int n = sh.swap_batch(S2, s2, apexes, 1 << 30, ap2, dirty);
-    if (!n) break;
-    // Only the funnel between the apexes around each swap is run again (a round costs what it changes).
-    double L2 = sh.refunnel(S2, s2, ap2, dirty);
-    if (!(L2 < L - 1e-12 * L) && n > 1) {  // the batch did not help: the single best swap alone
-      S2.assign(S.begin(), S.end());
-      s2.assign(sp.begin(), sp.end());
-      n = sh.swap_batch(S2, s2, apexes, 1, ap2, dirty);
-      if (!n) break;
-      L2 = sh.refunnel(S2, s2, ap2, dirty);
-    }
-    if (debug)
-      std::fprintf(stderr, "swap round %d: %d swaps, %.9f -> %.9f (strip %zu)\n", it, n, L, L2, S2.size());
-    if (!(L2 < L + 1e-9 * L)) break;  // a swap below pi shortens; allow relaxation noise only
-    if (!(L2 < L - 1e-12 * L) && ++flat_rounds > 3) break;
-    S.swap(S2), sp.swap(s2), apexes.swap(ap2), L = std::min(L, L2);
-    R.swaps += n;
-    ++rounds;
-    round_length.push_back(L);
-    if (rounds >= kProgressWindow &&
-        round_length[std::size_t(rounds - kProgressWindow)] - L < kMinProgress * L)
-      break;
-  }
-  // The windows kept every crossing but the one the first funnel was cut at; a funnel over the whole
-  // strip settles that one too.
-  if (R.swaps > 0) L = sh.funnel_through_apex(S, sp, apexes, {});
+  int rounds = 0;
+  L = sh.swap_rounds(S, sp, apexes, L, opt.max_swaps, R.swaps, rounds, debug);
   clock.lap(StepClock::kSwaps);
   sh.polish(S, sp, 200);
   auto pts = sh.strip_points(S, sp);
@@ -323,6 +284,13 @@ ShortenResult shorten_loop(const SurfaceMesh& mesh, const MeshAdjacency& adj, co
 }
 
 void release_shortening_scratch() noexcept { detail::DenseIntMap::release_pool(); }
+
+void prepare_shortening_scratch(const SurfaceMesh& mesh) {
+  // A shortening holds four maps at most at once (the ring region's, the band candidates', the band's two),
+  // over the faces or the vertices: four of the larger size, made and given back, wait in the pool for any.
+  const std::size_t keys = std::max(mesh.faces.size(), mesh.vertices.size());
+  detail::DenseIntMap a(keys), b(keys), c(keys), d(keys);
+}
 
 ShortenResult shorten_loop(const SurfaceMesh& mesh, const std::vector<int>& loop, const ShortenOptions& options) {
   auto adj = build_adjacency(mesh);

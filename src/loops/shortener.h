@@ -1,7 +1,8 @@
 #pragma once
-// Internals of shorten_loop shared by its files: the ring region around the loop (shorten_region.cpp), the
-// annulus band in it, the Shortener that holds the band (steps 1-2 in shorten_band.cpp, step 3 in
-// shorten_strip.cpp and shorten_section.cpp) and the small 3D helpers and the heap they use.
+// Internals of shorten_loop and shorten_strip_loop shared by their files: the ring region around the loop
+// (shorten_region.cpp), the annulus band in it, the Shortener that holds the band (steps 1-2 in
+// shorten_band.cpp, step 3 in shorten_strip.cpp, shorten_swaps.cpp and shorten_section.cpp; the entry from a
+// strip in shorten_from_strip.cpp) and the small 3D helpers and the heap they use.
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -21,12 +22,22 @@ using P3 = std::array<double, 3>;
 inline double dist3(const P3& a, const P3& b) {
   return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
+inline double dist3_squared(const P3& a, const P3& b) {
+  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
 inline P3 lerp3(const P3& a, const P3& b, double s) { return {a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])}; }
 inline double angle3(const P3& v, const P3& a, const P3& b) {  // angle at v between v->a and v->b
   P3 u{a[0] - v[0], a[1] - v[1], a[2] - v[2]}, w{b[0] - v[0], b[1] - v[1], b[2] - v[2]};
   P3 c{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
   double cn = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
   return std::atan2(cn, u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
+}
+// x mod m for 0 <= x < 3m, without a division: the strip's loops take an index round the strip at every
+// portal, and `% m` with m known only at run time is a division (the swap rounds ~7% faster without them).
+inline int wrap(int x, int m) {
+  if (x >= m) x -= m;
+  if (x >= m) x -= m;
+  return x;
 }
 // A 4-ary min-heap of (distance, node), popped in the order of that pair as std::priority_queue with
 // std::greater pops it (so the search relaxes in the same order): shallower than a binary heap, and its
@@ -152,7 +163,9 @@ struct Shortener {
 
   int vert(int h) const { return mesh.faces[h / 3][h % 3]; }          // source of half-edge h
   int vert_to(int h) const { return mesh.faces[h / 3][(h % 3 + 1) % 3]; }
-  bool face_in(int f) const { return f >= 0 && band.in_face.contains(f); }
+  // Every face is in when there is no band (shorten_strip_loop's swaps).
+  bool whole_mesh = false;
+  bool face_in(int f) const { return f >= 0 && (whole_mesh || band.in_face.contains(f)); }
   int local_of(int v) const {
     const int* l = band.local.find(v);
     return l ? *l : -1;
@@ -229,9 +242,11 @@ struct Shortener {
   // `end_angle`, when given, receives for a closed loop (s_from = s_to) the angle at the held crossing
   // between the loop's last and first segments, on the side of the portal's left end (its right end when
   // held at the left end): pi where the loop runs straight through; `plane_length` the length of the path
-  // in the plane of the unfolding.
+  // in the plane of the unfolding; `loop_length`, for the closed loop, that of the polyline through its
+  // crossings (params_length).
   void funnel_segment(const std::vector<int>& S, int from, int count, double s_from, double s_to, std::vector<double>& s,
-                      std::vector<Apex>& apexes, double* end_angle = nullptr, double* plane_length = nullptr);
+                      std::vector<Apex>& apexes, double* end_angle = nullptr, double* plane_length = nullptr,
+                      double* loop_length = nullptr);
   // After swaps, the funnel again only where the strip changed: `dirty` lists portal ranges [first, last]
   // whose inner crossings are unknown; `apexes` (the old ones outside those ranges, in portal order)
   // anchor each range's funnel between the apexes around it, widened until the apexes next to the range
@@ -258,6 +273,7 @@ struct Shortener {
                              const std::vector<std::array<int, 2>>& dirty);
   int apex_funnels = 0, apex_funnels_relaxed = 0;  // how funnel_through_apex went, for the trace and tests
 
+  // ---- Step 3: side swaps (shorten_swaps.cpp) ----------------------------------------------------
   // Faces around v from f_a the other way round to f_b (f_a and f_b included, so at least two), appended to
   // `run`; false (and `run` as it was) when there is no such fan in the band.
   bool other_fan(int v, int fa, int fb, int fa_next, std::vector<int>& run) const;
@@ -278,6 +294,13 @@ struct Shortener {
   // swaps made unknown (for refunnel).
   int swap_batch(std::vector<int>& S, std::vector<double>& s, const std::vector<Apex>& apexes, int limit,
                  std::vector<Apex>& kept, std::vector<std::array<int, 2>>& dirty);
+  // Rounds of swap_batch, each refunnelled where it changed, while the loop shortens (at most max_swaps swaps
+  // in all), then one funnel over the whole strip when any swap was made. Takes the
+  // relaxed strip and its length; returns the new length and adds to `swaps` and `rounds`.
+  // `max_rounds`: a loop still shortening after that many rounds stops there and sets `unfinished`.
+  double swap_rounds(std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes, double length, int max_swaps,
+                     int& swaps, int& rounds, bool debug, int max_rounds = 400, bool* unfinished = nullptr);
+
 };
 
 }  // namespace chokeloops::shorten_detail
