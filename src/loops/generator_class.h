@@ -4,10 +4,12 @@
 // cycles the generator chokes of one side close span that side's homology (linking.h), so a curve bounds
 // on its side exactly when it links none of the other side's cycles.
 #include <array>
+#include <cstddef>
 #include <vector>
 
 #include "chokeloops/grid.h"
 #include "chokeloops/loops/membranes.h"
+#include "chokeloops/loops/shorten.h"
 #include "chokeloops/surface/mesh_adjacency.h"
 #include "chokeloops/surface/surface.h"
 #include "chokeloops/topology/chokes.h"
@@ -55,19 +57,33 @@ bool section_cannot_link_odd(const SurfaceSections& sections, const Polyline3& c
 bool drop_dependent_generators(std::vector<Loop>& loops, const GeneratorCycles& cycles, std::size_t max_loops = 1000);
 
 // Whether a plane section is a loop of a generator of its side: it links `own` (when given) an odd number of
-// times and none of `other_side`, and is essential on the surface; `path` is then the section snapped to edges.
+// times and none of `other_side`, and is essential on the surface; `path` is then an edge loop of its class:
+// the side of its strip of `faces` when given (SurfaceSections::around), else the section snapped to edges.
 bool section_bounds_on_its_side(const SurfaceMesh& surface, const MeshAdjacency& adjacency, SurfaceTopology& topology,
                                 const Polyline3& section, const std::vector<const SideCycle*>& other_side, const SideCycle* own,
-                                std::vector<int>& path);
+                                std::vector<int>& path, const std::vector<int>* faces = nullptr);
 
 // The start of generator `c`'s loop without a membrane: the section by the plane through the choke point square
 // to the choke's own cycle (where the cycle passes nearest the choke), the innermost curve round the choke at
 // any radius, when it passes section_bounds_on_its_side. Across a handle resolved by the grid that plane cuts
-// it as its membrane does (the loop tracer asks it only for chokes two voxels deep or more).
+// it as its membrane does (the loop tracer asks it only for chokes two voxels deep or more). `out_faces` gets
+// the faces the section crosses in turn (SurfaceSections::around), empty where it was not followed face by face.
 bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, const MeshAdjacency& adjacency,
                            SurfaceTopology& topology, const SurfaceSections& sections, const Choke& c,
                            const std::vector<const SideCycle*>& other_side, const SideCycle& own, Polyline3& out,
-                           std::vector<int>& out_path);
+                           std::vector<int>& out_path,
+                           std::vector<int>& out_faces);
+
+// A plane start's section (its faces in turn, generator_plane_start) crossing this many faces or more is
+// shortened from them: on shorter ones the band search costs little, and from a section running obliquely
+// over a hole's stepped wall the swaps stop in a loop 1% longer than the band search's (43 of the pierced
+// block's tunnel loops when every section was).
+constexpr std::size_t kStripStartFaces = 1000;
+
+// shorten_strip_loop on a plane start's faces when they are kStripStartFaces or more; true when its loop
+// finished within max_move of the section (`out` is then the loop), false for the band search.
+bool shorten_plane_start(const SurfaceMesh& surface, const MeshAdjacency& adjacency, const std::vector<int>& faces,
+                         double max_move, ShortenResult& out);
 
 // The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
 // point in 48 directions, and by planes square to the choke's own cycle at about 40 points along it,

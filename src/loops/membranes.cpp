@@ -143,15 +143,15 @@ class LoopTracer {
     if (options.plane_start && c.kind == Kind::Generator && check.other_side && own_cycle &&
         c.depth >= kPlaneStartDepth * h) {
       Polyline3 section;
-      std::vector<int> section_path;
+      std::vector<int> section_path, section_faces;
       const bool taken = detail::generator_plane_start(g_, S_, A_, *T_, sections(), c, *check.other_side, *own_cycle, section,
-                                                       section_path);
+                                                       section_path, section_faces);
       if (debug_) std::fprintf(stderr, "membranes: %s generator depth %g: plane start %s\n", to_string(c.side), c.depth, taken ? "taken" : "refused");
       if (taken) {
         Loop from_section = loop;
         from_section.found = true;
         try {
-          if (finish_loop(from_section, options, section, section_path, true)) return from_section;
+          if (finish_loop(from_section, options, section, section_path, true, &section_faces)) return from_section;
         } catch (const Error&) {
           // its membrane, as for any other generator
         }
@@ -250,7 +250,7 @@ class LoopTracer {
   // loop slips off a generator's handle (null-homologous), false is returned and the loop is left half made,
   // instead of reporting the curve unshortened.
   bool finish_loop(Loop& loop, const LoopOptions& options, const Polyline3& raw, const std::vector<int>& raw_path,
-                   bool shortened_or_nothing) const {
+                   bool shortened_or_nothing, const std::vector<int>* raw_faces = nullptr) const {
     const Choke& c = loop.choke;
     const double h = g_.voxel_size;
     auto t_shorten = std::chrono::steady_clock::now();
@@ -268,7 +268,14 @@ class LoopTracer {
       // of 8 rings first (12 only for the 15 that reached its edge), and its median loop went 5.7 -> 4.6 ms
       // with two smaller changes (README, "A narrow band first").
       so.first_rings = 8;
-      ShortenResult best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
+      // A plane start's long section is shortened from its own faces where that finishes near it (README,
+      // "From the plane section's own faces"); otherwise, and for any other curve, the band search.
+      ShortenResult best;
+      const bool from_strip = raw_faces && detail::shorten_plane_start(S_, A_, *raw_faces, so.max_move, best);
+      if (debug_ && raw_faces && raw_faces->size() >= detail::kStripStartFaces)
+        std::fprintf(stderr, "membranes: %s %s depth %g: strip start %s\n", to_string(c.side), to_string(c.kind), c.depth,
+                     from_strip ? "kept" : "still moving");
+      if (!from_strip) best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
       auto slide = [&](ShortenResult& r) {
         if (r.rings > 0 && options.slide && r.at_band_edge) detail::slide_to_narrowest(g_, S_, A_, r, so, c.depth + 2 * h, debug_);
@@ -541,6 +548,7 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
   // One choke whose loop cannot be made (e.g. a membrane interface spanning two surface components of a
   // raw segmentation) is reported without a loop; it does not stop the others.
   tbb::parallel_for(0, workers, [&](int worker) {
+   prepare_shortening_scratch(surface);
    if (worker == 0 && build_basis) {
      try {
        topology->prepare_homology();
@@ -558,7 +566,11 @@ std::vector<Loop> trace_loops(const ScalarGrid& grid, const SurfaceMesh& surface
     const std::size_t i = std::size_t(picked);
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr, membranes ? &(*membranes)[i] : nullptr);
+      // Isolated: a trace waiting in a parallel loop of its own (plane sections, a slide) takes up no part
+      // of another worker's trace, whose time would count as this loop's.
+      tbb::this_task_arena::isolate([&] {
+        loops[i] = tracer.trace(chokes[i], options, topology ? cycles.own[i] : nullptr, membranes ? &(*membranes)[i] : nullptr);
+      });
     } catch (const Error& e) {
       loops[i] = Loop{};
       loops[i].choke = chokes[i];
