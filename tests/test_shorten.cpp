@@ -573,7 +573,10 @@ TEST(Shorten, BandCandidatesAndEulerCharacteristicForEveryRingCount) {
   const int max_k = 40;
   const MeridianOnTorus torus = wiggly_meridian_on_torus(40, max_k);
   const auto& [m, adj, loop, lr] = torus;
-  const auto& [rid, region, ring, near] = lr;
+  // Named, not bound: the lambdas below capture rid and near (C++17).
+  const auto& rid = lr.rid;
+  const auto& near = lr.near;
+  const auto &region = lr.region, &ring = lr.ring;
   int annuli = 0, not_annuli = 0, touching_only = 0;
   for (int barred_every : {0, 7}) {
     std::vector<int> entry = ring;

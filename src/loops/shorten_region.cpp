@@ -89,7 +89,10 @@ void RingRegion::surface_distances(double max_move, std::vector<double>& dist) c
   }
   const Arc* const arc = arcs_.get();
   while (!q.empty()) {
-    const auto [d, i] = heap_pop(q);
+    // A named entry, not a structured binding: the lambda below captures its distance (C++17).
+    const QueueEntry top = heap_pop(q);
+    const double d = top.d;
+    const int i = top.node;
     if (d > dist[std::size_t(i)] || d > max_move) continue;
     auto relax = [&](int wi, double length) {
       const double nd = d + length;

@@ -124,7 +124,12 @@ void Shortener::funnel_segment(const std::vector<int>& S, int from, int count, d
                                double* loop_length) {
   const int m = int(S.size());
   thread_local FunnelScratch scratch;
-  auto& [L2, R2, Lv, Rv, pts, pidx, pside, chain] = scratch;
+  // Named references, not a structured binding: the lambdas below capture them (C++17).
+  auto &L2 = scratch.L2, &R2 = scratch.R2;
+  auto &Lv = scratch.Lv, &Rv = scratch.Rv;
+  auto& pts = scratch.pts;
+  auto &pidx = scratch.pidx, &pside = scratch.pside;
+  auto& chain = scratch.chain;
   L2.resize(count + 1), R2.resize(count + 1), Lv.resize(count + 1), Rv.resize(count + 1);
   // Unfold: 2D coordinates of portal endpoints, in traversal order i = 0..count (portal from+i).
   int h = portal_of(S[std::size_t(from)], S[std::size_t(wrap(from + 1, m))]);
