@@ -182,8 +182,8 @@ bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, c
 }
 
 bool shorten_plane_start(const SurfaceMesh& surface, const MeshAdjacency& adjacency, const std::vector<int>& faces,
-                         double max_move, ShortenResult& out) {
-  if (faces.size() < kStripStartFaces) return false;
+                         std::size_t min_faces, double max_move, ShortenResult& out) {
+  if (faces.size() < min_faces) return false;
   ShortenOptions options;
   options.max_move = max_move;
   try {

@@ -74,16 +74,11 @@ bool generator_plane_start(const ScalarGrid& grid, const SurfaceMesh& surface, c
                            std::vector<int>& out_path,
                            std::vector<int>& out_faces);
 
-// A plane start's section (its faces in turn, generator_plane_start) crossing this many faces or more is
-// shortened from them: on shorter ones the band search costs little, and from a section running obliquely
-// over a hole's stepped wall the swaps stop in a loop 1% longer than the band search's (43 of the pierced
-// block's tunnel loops when every section was).
-constexpr std::size_t kStripStartFaces = 1000;
-
-// shorten_strip_loop on a plane start's faces when they are kStripStartFaces or more; true when its loop
-// finished within max_move of the section (`out` is then the loop), false for the band search.
+// shorten_strip_loop on a plane start's faces (its section's, in turn: generator_plane_start) when they are
+// `min_faces` or more (LoopOptions::strip_start_faces); true when its loop finished within max_move of the
+// section (`out` is then the loop), false for the band search.
 bool shorten_plane_start(const SurfaceMesh& surface, const MeshAdjacency& adjacency, const std::vector<int>& faces,
-                         double max_move, ShortenResult& out);
+                         std::size_t min_faces, double max_move, ShortenResult& out);
 
 // The loop of generator `c` found as HOLE finds a pore: the surface's sections by planes through the choke
 // point in 48 directions, and by planes square to the choke's own cycle at about 40 points along it,

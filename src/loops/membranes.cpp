@@ -271,8 +271,9 @@ class LoopTracer {
       // A plane start's long section is shortened from its own faces where that finishes near it (README,
       // "From the plane section's own faces"); otherwise, and for any other curve, the band search.
       ShortenResult best;
-      const bool from_strip = raw_faces && detail::shorten_plane_start(S_, A_, *raw_faces, so.max_move, best);
-      if (debug_ && raw_faces && raw_faces->size() >= detail::kStripStartFaces)
+      const bool from_strip =
+          raw_faces && detail::shorten_plane_start(S_, A_, *raw_faces, options.strip_start_faces, so.max_move, best);
+      if (debug_ && raw_faces && raw_faces->size() >= options.strip_start_faces)
         std::fprintf(stderr, "membranes: %s %s depth %g: strip start %s\n", to_string(c.side), to_string(c.kind), c.depth,
                      from_strip ? "kept" : "still moving");
       if (!from_strip) best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
@@ -317,6 +318,7 @@ class LoopTracer {
       // its edge path (it cuts across faces).
       if (best.points.size() >= 3 && (best.rings > 0 || best.length < loop.raw_length)) loop.points = best.points;
       loop.edge_path = best.edge_path;
+      loop.from_strip = from_strip;
     } else {
       loop.edge_path = raw_path.empty() ? snap_polyline_to_edge_path(S_, A_, raw) : raw_path;
     }
