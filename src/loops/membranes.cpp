@@ -275,7 +275,7 @@ class LoopTracer {
           raw_faces && detail::shorten_plane_start(S_, A_, *raw_faces, options.strip_start_faces, so.max_move, best);
       if (debug_ && raw_faces && raw_faces->size() >= options.strip_start_faces)
         std::fprintf(stderr, "membranes: %s %s depth %g: strip start %s\n", to_string(c.side), to_string(c.kind), c.depth,
-                     from_strip ? "kept" : "still moving");
+                     from_strip ? "kept" : "not kept (still moving, moved past max_move, or no strip)");
       if (!from_strip) best = raw_path.empty() ? shorten_polyline(S_, A_, raw, so) : shorten_loop(S_, A_, raw_path, so);
       // A loop that stayed clear of its band's edge is the narrowest section within max_move already.
       auto slide = [&](ShortenResult& r) {

@@ -300,7 +300,6 @@ struct Shortener {
   // `max_rounds`: a loop still shortening after that many rounds stops there and sets `unfinished`.
   double swap_rounds(std::vector<int>& S, std::vector<double>& s, std::vector<Apex>& apexes, double length, int max_swaps,
                      int& swaps, int& rounds, bool debug, int max_rounds = 400, bool* unfinished = nullptr);
-
 };
 
 }  // namespace chokeloops::shorten_detail
